@@ -1,0 +1,195 @@
+//! # gdshader: the Godot shading language front end
+//!
+//! gdsky ports Godot 4 sky shaders to WGSL and SPIR-V. This crate is its first half: it reads a
+//! `.gdshader` file and decides, with Godot's own rules, whether it is a valid sky shader, and
+//! what every name and expression in it means. It knows nothing of naga or GPUs; the lowering
+//! crate takes a [`CheckedShader`] from here.
+//!
+//! ## Stages
+//!
+//! ```text
+//! bytes ─ UTF-8 check ─ preprocess ─ parse ─ check ─▶ CheckedShader + diagnostics
+//! ```
+//!
+//! * [`preprocess`] runs `#define`/`#if`/`#include` as Godot's shader preprocessor does, and
+//!   keeps a [`SourceMap`] from every byte of its output back to the file it came from.
+//! * [`parse`] is a pest grammar for the whole language as sky shaders use it, preceded by a
+//!   pre-scan that bounds nesting (so no input can overflow the stack) and followed by a builder
+//!   that makes an AST with a span on every node.
+//! * [`check`] resolves names, types expressions, folds constants and enforces Godot's rules.
+//!
+//! Each stage reports [`Diagnostic`]s instead of stopping at the first problem (the parser is the
+//! exception: a syntax error ends parsing, since pest does not recover). Stages after the
+//! preprocessor report in preprocessed-text coordinates; [`check_source`] maps them back through
+//! the source map so every diagnostic names the file, line and column the user wrote.
+//!
+//! ## Safety on hostile input
+//!
+//! Any bytes give diagnostics, never a panic, hang or unbounded memory: invalid UTF-8 and control
+//! characters are reported before parsing; nesting is bounded before pest recurses; expression
+//! trees are bounded in depth; macro expansion is bounded in size; array sizes are bounded. The
+//! front end also runs on a thread with a generous stack, so a recursion bound that is generous
+//! to real shaders cannot become a crash on a small default stack. `fuzz/` holds a cargo-fuzz
+//! target for all of it.
+
+pub mod check;
+pub mod diag;
+pub mod parse;
+pub mod preprocess;
+
+pub use check::CheckedShader;
+pub use diag::{Diagnostic, FileId, Label, Severity, SourceDb};
+pub use preprocess::{FsLoader, Loader, SourceMap};
+
+use parse::SpannedDiagnostic;
+use std::path::{Path, PathBuf};
+
+/// Stack size of the thread the front end runs on: enough for [`parse::MAX_NESTING`] levels of
+/// pest recursion in an unoptimised build, with a wide margin.
+const FRONTEND_STACK_BYTES: usize = 256 << 20;
+
+/// Everything one run of the front end produced.
+pub struct FrontendOutput {
+    /// Every file read (the shader and its includes), for rendering diagnostics.
+    pub db: SourceDb,
+    /// The file that was checked.
+    pub root: FileId,
+    /// Errors and warnings, in the order found.
+    pub diagnostics: Vec<Diagnostic>,
+    /// The checked shader, when there were no errors.
+    pub shader: Option<CheckedShader>,
+    /// Files read through `#include`.
+    pub includes: Vec<PathBuf>,
+}
+
+impl FrontendOutput {
+    /// True when any diagnostic is an error.
+    pub fn has_errors(&self) -> bool {
+        self.diagnostics.iter().any(Diagnostic::is_error)
+    }
+}
+
+/// Reads and checks the shader at `path`, reading includes from disk.
+pub fn check_file(path: &Path) -> std::io::Result<FrontendOutput> {
+    let bytes = std::fs::read(path)?;
+    Ok(check_source(
+        &path.display().to_string(),
+        bytes,
+        Some(path.to_path_buf()),
+        &mut FsLoader,
+    ))
+}
+
+/// Checks shader source `bytes` named `name` (a display name; `path`, when given, is where
+/// relative `#include`s are resolved from).
+pub fn check_source(
+    name: &str,
+    bytes: Vec<u8>,
+    path: Option<PathBuf>,
+    loader: &mut (dyn Loader + Send),
+) -> FrontendOutput {
+    std::thread::scope(|scope| {
+        let worker = std::thread::Builder::new()
+            .stack_size(FRONTEND_STACK_BYTES)
+            .spawn_scoped(scope, || run(name, bytes, path, loader));
+        match worker.map(|handle| handle.join()) {
+            Ok(Ok(output)) => output,
+            // A failed spawn or a panic is a bug in gdsky, not in the shader; say so plainly.
+            _ => internal_error(name),
+        }
+    })
+}
+
+fn internal_error(name: &str) -> FrontendOutput {
+    let mut db = SourceDb::new();
+    let root = db.add(name, String::new(), None);
+    let diagnostics = vec![
+        Diagnostic::error("E999", "internal error in the gdsky front end")
+            .with_primary(root, 0..0, "")
+            .with_note("this is a bug in gdsky; please report it with the shader that caused it"),
+    ];
+    FrontendOutput {
+        db,
+        root,
+        diagnostics,
+        shader: None,
+        includes: Vec::new(),
+    }
+}
+
+fn run(
+    name: &str,
+    bytes: Vec<u8>,
+    path: Option<PathBuf>,
+    loader: &mut dyn Loader,
+) -> FrontendOutput {
+    let mut db = SourceDb::new();
+    let mut diagnostics = Vec::new();
+    let text = match String::from_utf8(bytes) {
+        Ok(text) => text,
+        Err(err) => {
+            let at = err.utf8_error().valid_up_to();
+            let lossy = String::from_utf8_lossy(err.as_bytes()).into_owned();
+            let root = db.add(name, lossy, path);
+            diagnostics.push(
+                Diagnostic::error(diag::codes::INVALID_UTF8, "the file is not valid UTF-8")
+                    .with_primary(root, at..at + 1, "invalid byte sequence here")
+                    .with_note("Godot reads shaders as UTF-8 text; re-save the file as UTF-8"),
+            );
+            return FrontendOutput {
+                db,
+                root,
+                diagnostics,
+                shader: None,
+                includes: Vec::new(),
+            };
+        }
+    };
+    let root = db.add(name, text, path);
+    let pre = preprocess::preprocess(&mut db, root, loader, &mut diagnostics);
+    let (ast, parse_diags) = parse::parse(&pre.text);
+    let parse_failed = parse_diags.iter().any(|d| d.diagnostic.is_error());
+    diagnostics.extend(parse_diags.into_iter().map(|d| locate(d, &pre.map, root)));
+    if parse_failed {
+        return FrontendOutput {
+            db,
+            root,
+            diagnostics,
+            shader: None,
+            includes: pre.includes,
+        };
+    }
+    let (checked, check_diags) = check::check(ast);
+    diagnostics.extend(check_diags.into_iter().map(|d| locate(d, &pre.map, root)));
+    let failed = diagnostics.iter().any(Diagnostic::is_error);
+    FrontendOutput {
+        db,
+        root,
+        diagnostics,
+        shader: (!failed).then_some(checked),
+        includes: pre.includes,
+    }
+}
+
+/// Turns a diagnostic in preprocessed-text coordinates into one with file labels.
+fn locate(d: SpannedDiagnostic, map: &SourceMap, root: FileId) -> Diagnostic {
+    let mut out = d.diagnostic;
+    let place = |span: parse::ast::Span| map.locate(span.range()).unwrap_or((root, 0..0));
+    let (file, range) = place(d.primary.0);
+    out.labels.push(Label {
+        file,
+        range,
+        message: d.primary.1,
+        primary: true,
+    });
+    for (span, message) in d.secondary {
+        let (file, range) = place(span);
+        out.labels.push(Label {
+            file,
+            range,
+            message,
+            primary: false,
+        });
+    }
+    out
+}

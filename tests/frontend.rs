@@ -1,0 +1,174 @@
+//! End-to-end tests of the front end through the `gdsky` library facade and binary.
+//!
+//! Test shaders live in `tests/shaders/{valid,invalid}`. Each invalid shader names, in a
+//! `// expect: LINE:COL what` comment written when the shader was written (from Godot's rules,
+//! not from gdsky's output), where its error is; the test holds gdsky's primary label to that
+//! line, and snapshots the whole rendered diagnostic for review.
+
+use gdsky::frontend::diag::{render_human, render_json};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// The path of a test file relative to the package root, as a user would type it.
+fn relative(path: &Path) -> PathBuf {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    path.strip_prefix(root).unwrap_or(path).to_path_buf()
+}
+
+/// The `// expect: LINE:COL` line of a test shader.
+fn expected_line(path: &Path) -> usize {
+    let bytes = std::fs::read(path).expect("test shader is readable");
+    let text = String::from_utf8_lossy(&bytes);
+    let at = text
+        .find("// expect: ")
+        .unwrap_or_else(|| panic!("{} has no `// expect:` line", path.display()));
+    let rest = &text[at + "// expect: ".len()..];
+    let line = rest.split(':').next().unwrap_or("");
+    line.trim()
+        .parse()
+        .unwrap_or_else(|_| panic!("{}: bad expect line", path.display()))
+}
+
+#[test]
+fn invalid_shaders_fail_where_expected() {
+    insta::glob!("shaders/invalid/*.gdshader", |path| {
+        let rel = relative(path);
+        let output = gdsky::check_file(&rel).expect("readable");
+        let first_error = output
+            .diagnostics
+            .iter()
+            .find(|d| d.is_error())
+            .unwrap_or_else(|| panic!("{} was accepted", rel.display()));
+        let label = first_error.primary_label().expect("an error has a label");
+        let (line, _) = output.db.line_col(label.file, label.range.start);
+        assert_eq!(
+            line,
+            expected_line(path),
+            "{}: first error reported on line {line}:\n{}",
+            rel.display(),
+            render_human(&output.db, &output.diagnostics, false)
+        );
+        insta::assert_snapshot!(render_human(&output.db, &output.diagnostics, false));
+    });
+}
+
+#[test]
+fn valid_shaders_are_accepted() {
+    insta::glob!("shaders/valid/*.gdshader", |path| {
+        let rel = relative(path);
+        let output = gdsky::check_file(&rel).expect("readable");
+        assert!(
+            !output.has_errors(),
+            "{} was rejected:\n{}",
+            rel.display(),
+            render_human(&output.db, &output.diagnostics, false)
+        );
+        assert!(output.shader.is_some());
+    });
+}
+
+#[test]
+fn freeman_sky_uniforms_as_the_checker_sees_them() {
+    let output =
+        gdsky::check_file(Path::new("fixtures/freeman_sky.gdshader")).expect("fixture is readable");
+    assert!(
+        output.diagnostics.is_empty(),
+        "{}",
+        render_human(&output.db, &output.diagnostics, false)
+    );
+    let shader = output.shader.expect("valid");
+    assert_eq!(shader.uniforms.len(), 24);
+    let view: Vec<serde_json::Value> = shader
+        .uniforms
+        .iter()
+        .map(|u| {
+            serde_json::json!({
+                "name": u.name,
+                "type": u.type_name,
+                "default": u.default_text,
+                "hints": u.hints.iter().map(|h| if h.args.is_empty() { h.name.clone() } else { format!("{}({})", h.name, h.args.join(", ")) }).collect::<Vec<_>>(),
+                "group": u.group.join("."),
+                "doc": u.doc,
+            })
+        })
+        .collect();
+    insta::assert_yaml_snapshot!(view);
+}
+
+fn gdsky() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_gdsky"))
+}
+
+#[test]
+fn check_exit_codes_follow_the_cli_contract() {
+    let ok = gdsky()
+        .args(["check", "fixtures/freeman_sky.gdshader"])
+        .output()
+        .expect("runs");
+    assert_eq!(
+        ok.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&ok.stderr)
+    );
+    let bad = gdsky()
+        .args([
+            "check",
+            "fixtures/freeman_sky.gdshader",
+            "tests/shaders/invalid/missing_semicolon.gdshader",
+        ])
+        .output()
+        .expect("runs");
+    assert_eq!(bad.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&bad.stderr);
+    assert!(
+        stderr.contains("tests/shaders/invalid/missing_semicolon.gdshader:"),
+        "{stderr}"
+    );
+    let missing = gdsky()
+        .args(["check", "tests/shaders/no_such_file.gdshader"])
+        .output()
+        .expect("runs");
+    assert_eq!(missing.status.code(), Some(2));
+}
+
+#[test]
+fn json_diagnostics_have_the_contract_fields() {
+    let out = gdsky()
+        .args([
+            "check",
+            "--diagnostics",
+            "json",
+            "tests/shaders/invalid/int_plus_float.gdshader",
+        ])
+        .output()
+        .expect("runs");
+    assert_eq!(out.status.code(), Some(1));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let lines: Vec<&str> = stdout.lines().collect();
+    assert!(!lines.is_empty());
+    for line in lines {
+        let v: serde_json::Value = serde_json::from_str(line).expect("each line is JSON");
+        for key in [
+            "file",
+            "line",
+            "column",
+            "end_line",
+            "end_column",
+            "severity",
+            "code",
+            "message",
+        ] {
+            assert!(v.get(key).is_some(), "{key} missing from {line}");
+        }
+        assert_eq!(v["file"], "tests/shaders/invalid/int_plus_float.gdshader");
+        assert_eq!(
+            v["line"],
+            expected_line(Path::new("tests/shaders/invalid/int_plus_float.gdshader"))
+        );
+    }
+    // The library's JSON and the binary's agree.
+    let output = gdsky::check_file(Path::new("tests/shaders/invalid/int_plus_float.gdshader"))
+        .expect("readable");
+    assert_eq!(render_json(&output.db, &output.diagnostics), stdout);
+}
