@@ -147,6 +147,17 @@ fn run(
     };
     let root = db.add(name, text, path);
     let pre = preprocess::preprocess(&mut db, root, loader, &mut diagnostics);
+    if diagnostics.iter().any(Diagnostic::is_error) {
+        // Like Godot, stop at preprocessor errors: the text they leave behind is not what the
+        // author meant, and parsing it would only report the consequences.
+        return FrontendOutput {
+            db,
+            root,
+            diagnostics,
+            shader: None,
+            includes: pre.includes,
+        };
+    }
     let (ast, parse_diags) = parse::parse(&pre.text);
     let parse_failed = parse_diags.iter().any(|d| d.diagnostic.is_error());
     diagnostics.extend(parse_diags.into_iter().map(|d| locate(d, &pre.map, root)));

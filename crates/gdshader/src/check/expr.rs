@@ -250,7 +250,7 @@ impl Checker {
     fn ident(&mut self, id: &ast::Ident) -> Option<ExprInfo> {
         if let Some(local) = self.scopes.iter().rev().find_map(|s| s.get(&id.name)) {
             return Some(ExprInfo {
-                ty: local.ty.clone(),
+                ty: local.ty.clone()?,
                 constant: local.is_const,
                 value: local.value.clone(),
             });
@@ -824,6 +824,11 @@ impl Checker {
             .find_map(|s| s.get(&callee.name))
             .map(|l| l.span)
         {
+            let label = if self.functions.contains_key(&callee.name) {
+                "this variable hides the function"
+            } else {
+                "declared here as a variable"
+            };
             self.error(
                 codes::NOT_CALLABLE,
                 format!("`{}` is a local variable here, not a function", callee.name),
@@ -831,7 +836,7 @@ impl Checker {
                 "",
             )
             .secondary
-            .push((local, "the variable that hides the function".into()));
+            .push((local, label.into()));
             return None;
         }
         if let Some(overloads) = self.functions.get(&callee.name).cloned() {

@@ -1,7 +1,7 @@
 //! Uniform hints: which hint fits which uniform, and what its arguments must be.
 
 use super::builtins::{HINTS, HintTarget};
-use super::consteval::ConstValue;
+use super::consteval::{ConstValue, ValueDisplay};
 use super::types::{Scalar, Type};
 use super::{Checker, HintInfo};
 use crate::diag::codes;
@@ -115,7 +115,7 @@ impl Checker {
                 continue;
             }
             let args = match name {
-                "hint_range" => self.hint_range(hint, default),
+                "hint_range" => self.hint_range(hint, default, *elem == Type::INT),
                 "hint_enum" => self.hint_enum(hint),
                 _ => {
                     if !hint.args.is_empty() {
@@ -144,6 +144,7 @@ impl Checker {
         &mut self,
         hint: &ast::Hint,
         default: Option<&ConstValue>,
+        u_is_int: bool,
     ) -> Option<Vec<String>> {
         if !(2..=3).contains(&hint.args.len()) {
             self.error(
@@ -214,7 +215,26 @@ impl Checker {
                 hint.span,
             );
         }
-        Some(values.iter().map(|v| v.to_string()).collect())
+        // Written the way the uniform's type reads them: `0.0` for a float, `0` for an int.
+        let ty = if u_is_int { Type::INT } else { Type::FLOAT };
+        Some(
+            values
+                .iter()
+                .map(|&v| {
+                    let value = if u_is_int {
+                        ConstValue::Int(v as i64)
+                    } else {
+                        ConstValue::Float(v)
+                    };
+                    ValueDisplay {
+                        value: &value,
+                        ty: &ty,
+                        structs: &[],
+                    }
+                    .to_string()
+                })
+                .collect(),
+        )
     }
 
     fn warn(&mut self, message: String, span: crate::parse::ast::Span) {

@@ -115,7 +115,8 @@ enum Global {
 /// What a local name is.
 #[derive(Clone, Debug)]
 struct Local {
-    ty: Type,
+    /// `None` when the declaration failed (already reported): uses are then silently untyped.
+    ty: Option<Type>,
     is_const: bool,
     value: Option<ConstValue>,
     span: Span,
@@ -243,15 +244,18 @@ impl Checker {
                         .diagnostic
                         .notes
                         .push("write `shader_type sky;`".into());
+                        // The rest is another language's built-ins; checking it would only cascade.
+                        return;
                     }
                     shader_type_seen = true;
                 }
                 _ if !shader_type_seen => {
+                    let at = Span::new(item.span.start as usize, item.span.start as usize);
                     self.error(
                         codes::SHADER_TYPE,
                         "a sky shader must begin with `shader_type sky;`",
-                        Span::new(0, 0),
-                        "expected `shader_type sky;` here",
+                        at,
+                        "expected `shader_type sky;` before this",
                     )
                     .diagnostic
                     .notes
@@ -266,8 +270,8 @@ impl Checker {
             self.error(
                 codes::SHADER_TYPE,
                 "a sky shader must begin with `shader_type sky;`",
-                Span::new(0, 0),
-                "expected `shader_type sky;` here",
+                shader.eof,
+                "found the end of the file",
             )
             .diagnostic
             .notes
@@ -339,6 +343,11 @@ impl Checker {
                 .diagnostic
                 .notes
                 .push("declare it `const`, make it a `uniform`, or move it into a function".into());
+                for d in &decl.declarators {
+                    self.global_spans
+                        .entry(d.name.name.clone())
+                        .or_insert(d.name.span);
+                }
             }
             ItemKind::Function(f) => self.function(f),
         }
@@ -714,7 +723,7 @@ impl Checker {
             param_locals.insert(
                 p.name.name.clone(),
                 Local {
-                    ty,
+                    ty: Some(ty),
                     is_const,
                     value: None,
                     span: p.name.span,
@@ -793,7 +802,8 @@ impl Checker {
         }
         self.scopes.pop();
         let ctx = self.current.take();
-        if ret != Type::Void && ctx.is_some_and(|c| c.returns == 0) {
+        // `sky()` with a return type has been reported above; a missing `return` would repeat it.
+        if ret != Type::Void && !is_sky && ctx.is_some_and(|c| c.returns == 0) {
             let t = self.type_name(&ret);
             self.error(
                 codes::BAD_RETURN,

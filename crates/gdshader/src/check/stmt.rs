@@ -276,19 +276,19 @@ impl Checker {
             } else {
                 self.local_var(&decl.ty, d).map(|ty| (ty, None, false))
             };
-            // Declare even a failed declaration (as an untyped name would cascade errors): the
-            // type is what it says it is when it could be resolved at all.
-            if let Some((ty, value, is_const)) = declared {
-                self.declare_local(
-                    &d.name,
-                    Local {
-                        ty,
-                        is_const,
-                        value,
-                        span: d.name.span,
-                    },
-                );
-            }
+            // A failed declaration still declares the name, untyped, so its uses do not each
+            // report it as unknown.
+            let (ty, value, is_const) =
+                declared.map_or((None, None, decl.is_const), |(t, v, c)| (Some(t), v, c));
+            self.declare_local(
+                &d.name,
+                Local {
+                    ty,
+                    is_const,
+                    value,
+                    span: d.name.span,
+                },
+            );
         }
     }
 

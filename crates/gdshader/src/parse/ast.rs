@@ -51,6 +51,8 @@ pub struct Shader {
     pub items: Vec<Item>,
     /// How many expressions the tree holds; [`ExprId`]s are `0..expr_count`.
     pub expr_count: u32,
+    /// The end of the text (for "expected … before the end of the file").
+    pub eof: Span,
 }
 
 /// A top-level item.

@@ -39,6 +39,7 @@ pub fn build_shader(
     Shader {
         items,
         expr_count: b.next_id,
+        eof: Span::new(text.len(), text.len()),
     }
 }
 

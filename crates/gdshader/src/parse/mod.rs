@@ -104,42 +104,60 @@ pub fn parse(text: &str) -> (ast::Shader, Vec<SpannedDiagnostic>) {
             let shader = build::build_shader(root, text, &scanned.doc_comments, &mut diags);
             (shader, diags)
         }
-        Err(_) => {
-            diags.push(syntax_error(text));
+        Err(err) => {
+            diags.push(syntax_error(text, error_offset(&err), &scanned.item_starts));
             (ast::Shader::default(), diags)
         }
     }
 }
 
-/// Re-parses with pest's error detail switched on (it costs time, so only on failure) and turns
-/// what the grammar expected into a sentence.
-fn syntax_error(text: &str) -> SpannedDiagnostic {
-    pest::set_error_detail(true);
-    let result = GdParser::parse(Rule::shader, text);
-    pest::set_error_detail(false);
-    let Err(err) = result else {
-        return SpannedDiagnostic::error(codes::SYNTAX, "syntax error", Span::new(0, 0), "");
-    };
-    let pos = match err.location {
+fn error_offset(err: &pest::error::Error<Rule>) -> usize {
+    match err.location {
         pest::error::InputLocation::Pos(p) => p,
         pest::error::InputLocation::Span((s, _)) => s,
-    };
-    let (mut positives, mut negatives) = match &err.variant {
-        pest::error::ErrorVariant::ParsingError {
-            positives,
-            negatives,
-        } => (positives.clone(), negatives.clone()),
-        pest::error::ErrorVariant::CustomError { .. } => (Vec::new(), Vec::new()),
-    };
-    let mut tokens = Vec::new();
-    if let Some(attempts) = err.parse_attempts() {
-        for t in attempts.expected_tokens() {
-            tokens.push(t.to_string());
-        }
     }
+}
+
+/// Re-parses with pest's error detail switched on (it costs time, so only on failure) and turns
+/// what the grammar expected into a sentence.
+///
+/// Only the top-level item holding the error is re-parsed: from the last `;` or `}` outside all
+/// brackets before the error. When that does not fail at the same place (the error began in an
+/// earlier item), the whole text is re-parsed.
+fn syntax_error(text: &str, pos: usize, item_starts: &[usize]) -> SpannedDiagnostic {
+    let start = item_starts
+        .iter()
+        .rev()
+        .copied()
+        .find(|&s| s <= pos)
+        .unwrap_or(0);
+    let detailed = |from: usize| {
+        pest::set_error_detail(true);
+        let result = GdParser::parse(Rule::shader, &text[from..]);
+        pest::set_error_detail(false);
+        result.err().map(|e| (from, e))
+    };
+    let found = detailed(start)
+        .filter(|(from, e)| from + error_offset(e) == pos)
+        .or_else(|| detailed(0));
+    let Some((from, err)) = found else {
+        return SpannedDiagnostic::error(codes::SYNTAX, "syntax error", Span::new(pos, pos), "");
+    };
+    let mut positives = match &err.variant {
+        pest::error::ErrorVariant::ParsingError { positives, .. } => positives.clone(),
+        pest::error::ErrorVariant::CustomError { .. } => Vec::new(),
+    };
+    let tokens: Vec<String> = err
+        .parse_attempts()
+        .map(|a| {
+            a.expected_tokens()
+                .iter()
+                .map(ToString::to_string)
+                .collect()
+        })
+        .unwrap_or_default();
     positives.dedup();
-    negatives.dedup();
-    rules::describe(text, pos, &positives, &tokens)
+    rules::describe(text, from + error_offset(&err), &positives, &tokens)
 }
 
 #[cfg(test)]

@@ -28,14 +28,14 @@ fn english(rule: Rule) -> Option<&'static str> {
         shader_type_decl | render_mode_decl | group_uniforms_decl | uniform_decl | struct_decl
         | global_const_decl | function_def | global_var_decl | stray_semicolon => "a declaration",
         struct_member => "a struct member",
-        kw_shader_type => "`shader_type`",
-        kw_render_mode => "`render_mode`",
-        kw_group_uniforms => "`group_uniforms`",
-        kw_uniform => "`uniform`",
+        kw_shader_type => "a declaration",
+        kw_render_mode => "a declaration",
+        kw_group_uniforms => "a declaration",
+        kw_uniform => "a declaration",
         kw_global => "`global`",
         kw_instance => "`instance`",
-        kw_struct => "`struct`",
-        kw_const => "`const`",
+        kw_struct => "a declaration",
+        kw_const => "a declaration",
         kw_void => "`void`",
         kw_inout => "`inout`",
         kw_in => "`in`",
@@ -85,7 +85,7 @@ pub fn describe(
             // Comments can start anywhere; saying so helps nobody.
         } else if OPERATOR_TOKENS.contains(&t.as_str()) || t == "[" {
             wants_operator = true;
-        } else if !t.is_empty() && t.chars().all(|c| c.is_ascii_punctuation()) {
+        } else if !t.is_empty() && t != "_" && t.chars().all(|c| c.is_ascii_punctuation()) {
             add(format!("`{t}`"));
         }
     }
@@ -97,7 +97,20 @@ pub fn describe(
     if wants_operator {
         add("an operator".to_string());
     }
+    // Tokens that only start a longer alternative already in the list add nothing.
+    if expected.iter().any(|e| e == "an expression") {
+        expected.retain(|e| !matches!(e.as_str(), "`(`" | "`{`" | "`[`"));
+    }
+    if expected.iter().any(|e| e == "a name") {
+        expected.retain(|e| !matches!(e.as_str(), "an operator" | "`[`"));
+    }
+    // "the end of the file" reads best last.
+    if let Some(i) = expected.iter().position(|e| e == "the end of the file") {
+        let eof = expected.remove(i);
+        expected.push(eof);
+    }
     let found = found_token(text, pos);
+    let notes = hints_for(text, pos, &found.1);
     let message = match expected.len() {
         0 => format!("unexpected {}", found.1),
         _ => format!("expected {}, found {}", join_or(&expected, 5), found.1),
@@ -117,7 +130,23 @@ pub fn describe(
         )
         .secondary(found.0, "next token");
     }
-    SpannedDiagnostic::error(codes::SYNTAX, message, found.0, "unexpected here")
+    notes.into_iter().fold(
+        SpannedDiagnostic::error(codes::SYNTAX, message, found.0, "unexpected here"),
+        SpannedDiagnostic::note,
+    )
+}
+
+/// Notes for mistakes people make coming from GLSL or other Godot shader types.
+fn hints_for(text: &str, pos: usize, found: &str) -> Vec<&'static str> {
+    let prev = text[..pos].chars().next_back();
+    match found {
+        "`^`" if prev == Some('^') => vec!["Godot has no `^^` operator; for bools write `a != b`"],
+        "`varying`" => vec![
+            "sky shaders have no varyings; Godot allows them in spatial and canvas_item shaders only",
+        ],
+        "`#`" => vec!["a directive must start its own line"],
+        _ => Vec::new(),
+    }
 }
 
 fn join_or(items: &[String], most: usize) -> String {

@@ -8,6 +8,9 @@ use crate::parse::ast::Span;
 pub struct Scanned {
     /// Byte ranges of `/** … */` comments, in order.
     pub doc_comments: Vec<(usize, usize)>,
+    /// Offsets just after each `;` or `}` outside all brackets: where a top-level item can
+    /// start. A syntax error is re-parsed from the last one before it (see `syntax_error`).
+    pub item_starts: Vec<usize>,
 }
 
 /// Nesting that pest will recurse into: a bracket or `?` (closed by `:`), holding how many
@@ -21,6 +24,7 @@ struct Frame {
 pub fn prescan(text: &str, diags: &mut Vec<SpannedDiagnostic>) -> Scanned {
     let bytes = text.as_bytes();
     let mut doc_comments = Vec::new();
+    let mut item_starts = vec![0];
     let mut frames: Vec<Frame> = vec![Frame {
         closer: 0,
         pending_controls: 0,
@@ -66,7 +70,10 @@ pub fn prescan(text: &str, diags: &mut Vec<SpannedDiagnostic>) -> Scanned {
                 depth += 1;
                 if depth > MAX_NESTING {
                     diags.push(nesting_error(i));
-                    return Scanned { doc_comments };
+                    return Scanned {
+                        doc_comments,
+                        item_starts,
+                    };
                 }
             }
             b')' | b']' | b'}' | b':' => {
@@ -82,8 +89,14 @@ pub fn prescan(text: &str, diags: &mut Vec<SpannedDiagnostic>) -> Scanned {
                     depth -= parent.pending_controls;
                     parent.pending_controls = 0;
                 }
+                if c == b'}' && frames.len() == 1 {
+                    item_starts.push(i + 1);
+                }
             }
             b';' => {
+                if frames.len() == 1 {
+                    item_starts.push(i + 1);
+                }
                 if let Some(frame) = frames.last_mut() {
                     depth -= frame.pending_controls;
                     frame.pending_controls = 0;
@@ -103,7 +116,10 @@ pub fn prescan(text: &str, diags: &mut Vec<SpannedDiagnostic>) -> Scanned {
                     depth += 1;
                     if depth > MAX_NESTING {
                         diags.push(nesting_error(start));
-                        return Scanned { doc_comments };
+                        return Scanned {
+                            doc_comments,
+                            item_starts,
+                        };
                     }
                 }
                 continue;
@@ -137,7 +153,10 @@ pub fn prescan(text: &str, diags: &mut Vec<SpannedDiagnostic>) -> Scanned {
         }
         diags.push(d);
     }
-    Scanned { doc_comments }
+    Scanned {
+        doc_comments,
+        item_starts,
+    }
 }
 
 fn nesting_error(at: usize) -> SpannedDiagnostic {
