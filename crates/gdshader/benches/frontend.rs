@@ -19,6 +19,15 @@ impl preprocess::Loader for NoIncludes {
     }
 }
 
+fn preprocess_only(text: &str) -> preprocess::Preprocessed {
+    let mut db = SourceDb::new();
+    let root = db.add("freeman_sky.gdshader", text.to_string(), None);
+    let mut diags = Vec::new();
+    let pre = preprocess::preprocess(&mut db, root, &mut NoIncludes, &mut diags);
+    assert!(diags.is_empty());
+    pre
+}
+
 fn preprocess_and_parse(text: &str) -> parse::ast::Shader {
     let mut db = SourceDb::new();
     let root = db.add("freeman_sky.gdshader", text.to_string(), None);
@@ -31,6 +40,11 @@ fn preprocess_and_parse(text: &str) -> parse::ast::Shader {
 
 fn frontend(c: &mut Criterion) {
     let mut group = c.benchmark_group("freeman_sky");
+    group.bench_function("preprocess", |b| {
+        b.iter(|| preprocess_only(black_box(FREEMAN)))
+    });
+    let text = preprocess_only(FREEMAN).text;
+    group.bench_function("parse", |b| b.iter(|| parse::parse(black_box(&text))));
     group.bench_function("preprocess+parse", |b| {
         b.iter(|| preprocess_and_parse(black_box(FREEMAN)))
     });

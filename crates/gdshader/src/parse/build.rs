@@ -783,41 +783,44 @@ impl Builder<'_> {
                     .unwrap_or_default();
                 (self.mk(ExprKind::InitList(args), span), d + 1)
             }
-            Rule::array_ctor => {
-                let mut elem = None;
-                let mut size = None;
-                let mut args = (Vec::new(), 0);
-                for p in pair.into_inner() {
-                    match p.as_rule() {
-                        Rule::ident => elem = Some(ident(p)),
-                        Rule::expr => size = Some(Box::new(self.expr(p))),
-                        Rule::args => args = self.args(p),
-                        _ => {}
+            Rule::named => {
+                let mut inner = pair.into_inner();
+                let Some(name) = inner.next().map(ident) else {
+                    return (self.mk(ExprKind::Error, span), 1);
+                };
+                match inner.next() {
+                    // The pair's span may run on over the space where a call was looked for.
+                    None => {
+                        let span = name.span;
+                        (self.mk(ExprKind::Ident(name), span), 1)
                     }
-                }
-                let elem = elem.unwrap_or_else(|| missing_ident(span));
-                (
-                    self.mk(
-                        ExprKind::ArrayCtor {
-                            elem,
+                    Some(tail) if tail.as_rule() == Rule::call_tail => {
+                        let (args, d) = tail
+                            .into_inner()
+                            .next()
+                            .map(|a| self.args(a))
+                            .unwrap_or_default();
+                        (self.mk(ExprKind::Call { callee: name, args }, span), d + 1)
+                    }
+                    Some(tail) => {
+                        let mut size = None;
+                        let mut args = (Vec::new(), 0);
+                        for p in tail.into_inner() {
+                            match p.as_rule() {
+                                Rule::expr => size = Some(Box::new(self.expr(p))),
+                                Rule::args => args = self.args(p),
+                                _ => {}
+                            }
+                        }
+                        let kind = ExprKind::ArrayCtor {
+                            elem: name,
                             size,
                             args: args.0,
-                        },
-                        span,
-                    ),
-                    args.1 + 1,
-                )
+                        };
+                        (self.mk(kind, span), args.1 + 1)
+                    }
+                }
             }
-            Rule::call => {
-                let mut inner = pair.into_inner();
-                let callee = inner
-                    .next()
-                    .map(ident)
-                    .unwrap_or_else(|| missing_ident(span));
-                let (args, d) = inner.next().map(|a| self.args(a)).unwrap_or_default();
-                (self.mk(ExprKind::Call { callee, args }, span), d + 1)
-            }
-            Rule::ident => (self.mk(ExprKind::Ident(ident(pair)), span), 1),
             _ => (self.mk(ExprKind::Error, span), 1),
         }
     }

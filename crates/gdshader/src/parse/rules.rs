@@ -11,8 +11,8 @@ fn english(rule: Rule) -> Option<&'static str> {
     Some(match rule {
         EOI => "the end of the file",
         ident | declarator_name | group_path => "a name",
-        number | bool_lit | prefix_op | operand | expr | paren | call | array_ctor | init_list
-        | args => "an expression",
+        number | bool_lit | prefix_op | operand | expr | paren | named | call_tail
+        | array_ctor_tail | init_list | args => "an expression",
         infix_op | ternary_mid => "an operator",
         post_inc | post_dec | member | method_call | index => return None,
         string => "a string",
