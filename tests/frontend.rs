@@ -190,3 +190,71 @@ fn json_diagnostics_have_the_contract_fields() {
         .expect("readable");
     assert_eq!(render_json(&output.db, &output.diagnostics), stdout);
 }
+
+#[test]
+fn hostile_inputs_get_a_diagnostic_and_exit_1() {
+    let dir = std::env::temp_dir().join(format!("gdsky-hostile-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let cases: Vec<(&str, Vec<u8>, &str)> = vec![
+        (
+            "parens",
+            format!(
+                "shader_type sky; void sky() {{ COLOR = vec3({}1.0{}); }}",
+                "(".repeat(20_000),
+                ")".repeat(20_000)
+            )
+            .into_bytes(),
+            "E500",
+        ),
+        (
+            "blocks",
+            format!(
+                "shader_type sky; void sky() {}{}",
+                "{".repeat(20_000),
+                "}".repeat(20_000)
+            )
+            .into_bytes(),
+            "E500",
+        ),
+        (
+            "macro_bomb",
+            {
+                let mut s = String::from("shader_type sky;\n#define A0 x\n");
+                for i in 0..40 {
+                    s.push_str(&format!("#define A{} A{i} A{i}\n", i + 1));
+                }
+                s.push_str("A40\n");
+                s.into_bytes()
+            },
+            "E017",
+        ),
+        ("nul", b"shader_type sky;\0void sky() {}".to_vec(), "E002"),
+        ("utf8", b"shader_type sky;\n\xff\xfe".to_vec(), "E001"),
+        (
+            "array",
+            b"shader_type sky; void sky() { float a[2000000000]; }".to_vec(),
+            "E501",
+        ),
+    ];
+    for (name, bytes, code) in cases {
+        let path = dir.join(format!("{name}.gdshader"));
+        std::fs::write(&path, bytes).expect("write");
+        let out = gdsky()
+            .args(["check", "--diagnostics", "json"])
+            .arg(&path)
+            .output()
+            .expect("runs");
+        assert_eq!(
+            out.status.code(),
+            Some(1),
+            "{name}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            stdout.contains(&format!("\"code\":\"{code}\"")),
+            "{name}: {stdout}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -820,3 +820,6 @@ impl Checker {
         }
     }
 }
+
+#[cfg(test)]
+mod tests;
