@@ -147,39 +147,35 @@ fn run(
     };
     let root = db.add(name, text, path);
     let pre = preprocess::preprocess(&mut db, root, loader, &mut diagnostics);
-    if diagnostics.iter().any(Diagnostic::is_error) {
-        // Like Godot, stop at preprocessor errors: the text they leave behind is not what the
-        // author meant, and parsing it would only report the consequences.
-        return FrontendOutput {
-            db,
-            root,
-            diagnostics,
-            shader: None,
-            includes: pre.includes,
-        };
-    }
-    let (ast, parse_diags) = parse::parse(&pre.text);
-    let parse_failed = parse_diags.iter().any(|d| d.diagnostic.is_error());
-    diagnostics.extend(parse_diags.into_iter().map(|d| locate(d, &pre.map, root)));
-    if parse_failed {
-        return FrontendOutput {
-            db,
-            root,
-            diagnostics,
-            shader: None,
-            includes: pre.includes,
-        };
-    }
-    let (checked, check_diags) = check::check(ast);
-    diagnostics.extend(check_diags.into_iter().map(|d| locate(d, &pre.map, root)));
-    let failed = diagnostics.iter().any(Diagnostic::is_error);
+    let shader = parse_and_check(&pre, root, &mut diagnostics);
     FrontendOutput {
         db,
         root,
         diagnostics,
-        shader: (!failed).then_some(checked),
+        shader,
         includes: pre.includes,
     }
+}
+
+/// Parses and checks preprocessed text; `None` when there were errors.
+fn parse_and_check(
+    pre: &preprocess::Preprocessed,
+    root: FileId,
+    diagnostics: &mut Vec<Diagnostic>,
+) -> Option<CheckedShader> {
+    if diagnostics.iter().any(Diagnostic::is_error) {
+        // Like Godot, stop at preprocessor errors: the text they leave behind is not what the
+        // author meant, and parsing it would only report the consequences.
+        return None;
+    }
+    let (ast, parse_diags) = parse::parse(&pre.text);
+    diagnostics.extend(parse_diags.into_iter().map(|d| locate(d, &pre.map, root)));
+    if diagnostics.iter().any(Diagnostic::is_error) {
+        return None;
+    }
+    let (checked, check_diags) = check::check(ast);
+    diagnostics.extend(check_diags.into_iter().map(|d| locate(d, &pre.map, root)));
+    (!diagnostics.iter().any(Diagnostic::is_error)).then_some(checked)
 }
 
 /// Turns a diagnostic in preprocessed-text coordinates into one with file labels.

@@ -195,6 +195,12 @@ impl Diagnostic {
         self
     }
 
+    /// Adds every note given (an `Option<String>` adds one or none).
+    pub fn with_notes(mut self, notes: impl IntoIterator<Item = String>) -> Self {
+        self.notes.extend(notes);
+        self
+    }
+
     /// True for errors.
     pub fn is_error(&self) -> bool {
         self.severity == Severity::Error

@@ -518,15 +518,11 @@ impl Pp<'_> {
             } else {
                 site.clone()
             };
-            let mut d = Diagnostic::error(codes::PP_MACRO_ARGUMENTS, err.message).with_primary(
-                file,
-                at,
-                "in this macro invocation",
+            self.report(
+                Diagnostic::error(codes::PP_MACRO_ARGUMENTS, err.message)
+                    .with_primary(file, at, "in this macro invocation")
+                    .with_notes(err.note),
             );
-            if let Some(note) = err.note {
-                d = d.with_note(note);
-            }
-            self.report(d);
         }
         match result {
             Ok(true) => {
@@ -1008,15 +1004,11 @@ impl Pp<'_> {
             }
         };
         if let Some(err) = self.exp.take_errors().into_iter().next() {
-            let mut d = Diagnostic::error(codes::PP_MACRO_ARGUMENTS, err.message).with_primary(
-                file,
-                at.clone(),
-                "in this condition",
+            self.report(
+                Diagnostic::error(codes::PP_MACRO_ARGUMENTS, err.message)
+                    .with_primary(file, at.clone(), "in this condition")
+                    .with_notes(err.note),
             );
-            if let Some(note) = err.note {
-                d = d.with_note(note);
-            }
-            self.report(d);
         }
         let joined: String = expanded.iter().map(|t| &*t.text).collect();
         match expr::eval(&joined) {
@@ -1029,15 +1021,11 @@ impl Pp<'_> {
                         find_word(&dl.text[a..b], id).map(|p| dl.range(a + p, a + p + id.len()))
                     })
                     .unwrap_or(at);
-                let mut d = Diagnostic::error(codes::PP_BAD_EXPRESSION, e.message).with_primary(
-                    file,
-                    place,
-                    "in this condition",
+                self.report(
+                    Diagnostic::error(codes::PP_BAD_EXPRESSION, e.message)
+                        .with_primary(file, place, "in this condition")
+                        .with_notes(e.note),
                 );
-                if let Some(note) = e.note {
-                    d = d.with_note(note);
-                }
-                self.report(d);
                 false
             }
         }
