@@ -23,6 +23,21 @@
 //! preprocessor report in preprocessed-text coordinates; [`check_source`] maps them back through
 //! the source map so every diagnostic names the file, line and column the user wrote.
 //!
+//! ## Example
+//!
+//! ```
+//! use gdshader::{FsLoader, check_source};
+//!
+//! let source = b"shader_type sky;\nuniform float exposure : hint_range(0.0, 4.0) = 1.0;\n\
+//!                void sky() { COLOR = EYEDIR * exposure; }";
+//! let output = check_source("sky.gdshader", source.to_vec(), None, &mut FsLoader);
+//! assert!(!output.has_errors());
+//! let shader = output.shader.expect("valid");
+//! assert_eq!(shader.uniforms[0].name, "exposure");
+//! assert_eq!(shader.uniforms[0].default_text.as_deref(), Some("1.0"));
+//! assert!(shader.builtins_used.contains("EYEDIR"));
+//! ```
+//!
 //! ## Safety on hostile input
 //!
 //! Any bytes give diagnostics, never a panic, hang or unbounded memory: invalid UTF-8 and control
