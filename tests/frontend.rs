@@ -33,6 +33,23 @@ fn expected_line(path: &Path) -> usize {
         .unwrap_or_else(|_| panic!("{}: bad expect line", path.display()))
 }
 
+/// The file an invalid shader's error is reported in: the shader itself, or the include named
+/// by `(in PATH)` on its expect line.
+fn expected_file(path: &Path) -> String {
+    let text = String::from_utf8_lossy(&std::fs::read(path).expect("readable")).into_owned();
+    let expect = text
+        .lines()
+        .find(|l| l.contains("// expect: "))
+        .unwrap_or("");
+    match expect
+        .split_once("(in ")
+        .and_then(|(_, rest)| rest.split_once(')'))
+    {
+        Some((include, _)) => include.to_string(),
+        None => relative(path).display().to_string(),
+    }
+}
+
 #[test]
 fn invalid_shaders_fail_where_expected() {
     let mut wrong = Vec::new();
@@ -48,9 +65,11 @@ fn invalid_shaders_fail_where_expected() {
                 // Errors inside an included file are reported there; the expect line names the
                 // line in the file that holds the problem.
                 let expected = expected_line(path);
-                if line != expected {
+                let file = output.db.name(label.file);
+                let expected_file = expected_file(path);
+                if line != expected || !file.ends_with(&expected_file) {
                     wrong.push(format!(
-                        "{}: expected line {expected}, reported line {line}:\n{rendered}",
+                        "{}: expected {expected_file}:{expected}, reported {file}:{line}:\n{rendered}",
                         rel.display()
                     ));
                 }

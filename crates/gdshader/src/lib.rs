@@ -198,6 +198,10 @@ fn locate(d: SpannedDiagnostic, map: &SourceMap, root: FileId) -> Diagnostic {
     let mut out = d.diagnostic;
     let place = |span: parse::ast::Span| map.locate(span.range()).unwrap_or((root, 0..0));
     let (file, range) = place(d.primary.0);
+    if map.in_expansion(d.primary.0.start as usize) {
+        out.notes
+            .push("the problem is in the text this macro invocation expands to".into());
+    }
     out.labels.push(Label {
         file,
         range,

@@ -81,6 +81,11 @@ impl SourceMap {
         self.segments.get(idx.checked_sub(1)?)
     }
 
+    /// True when `offset` of the preprocessed text was produced by a macro expansion.
+    pub fn in_expansion(&self, offset: usize) -> bool {
+        self.segment_at(offset).is_some_and(|s| !s.verbatim)
+    }
+
     /// The file and byte range a range of the preprocessed text came from.
     ///
     /// Returns `None` only when the map is empty (the preprocessed text is empty).
