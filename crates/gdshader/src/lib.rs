@@ -73,11 +73,17 @@ pub struct FrontendOutput {
     pub diagnostics: Vec<Diagnostic>,
     /// The checked shader, when there were no errors.
     pub shader: Option<CheckedShader>,
-    /// Files read through `#include`.
-    pub includes: Vec<PathBuf>,
+    /// The text the parser saw, its map back to the files, and the files read through
+    /// `#include`. Spans in [`CheckedShader`] are offsets of this text.
+    pub preprocessed: preprocess::Preprocessed,
 }
 
 impl FrontendOutput {
+    /// The file and byte range a span of the checked shader stands for.
+    pub fn locate(&self, span: parse::ast::Span) -> (FileId, std::ops::Range<usize>) {
+        self.preprocessed.map.locate(span.range()).unwrap_or((self.root, 0..0))
+    }
+
     /// True when any diagnostic is an error.
     pub fn has_errors(&self) -> bool {
         self.diagnostics.iter().any(Diagnostic::is_error)
@@ -128,7 +134,7 @@ fn internal_error(name: &str) -> FrontendOutput {
         root,
         diagnostics,
         shader: None,
-        includes: Vec::new(),
+        preprocessed: preprocess::Preprocessed::default(),
     }
 }
 
@@ -156,7 +162,7 @@ fn run(
                 root,
                 diagnostics,
                 shader: None,
-                includes: Vec::new(),
+                preprocessed: preprocess::Preprocessed::default(),
             };
         }
     };
@@ -168,7 +174,7 @@ fn run(
         root,
         diagnostics,
         shader,
-        includes: pre.includes,
+        preprocessed: pre,
     }
 }
 

@@ -24,7 +24,7 @@ pub(crate) const MAX_DEPTH: usize = 256;
 
 /// Most tokens one expansion (one invocation in the text, or one `#if` condition) may build up in
 /// memory: argument pre-expansions plus substituted bodies.
-pub(crate) const MAX_HELD: u64 = 4 << 20;
+pub(crate) const MAX_HELD: u64 = 1 << 20;
 
 /// FNV-1a: identifiers are short, and this is hashed once per identifier of the shader.
 #[derive(Default)]

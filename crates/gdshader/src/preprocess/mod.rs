@@ -55,6 +55,7 @@ impl Loader for FsLoader {
 }
 
 /// What the preprocessor hands to the parser.
+#[derive(Clone, Debug, Default)]
 pub struct Preprocessed {
     /// The text with directives removed (each directive line left as an empty line) and macros
     /// expanded.
@@ -71,9 +72,9 @@ const MAX_INCLUDE_DEPTH: usize = 25;
 /// no such limits, but a real shader comes nowhere near them, and without them 25 levels of
 /// includes each naming new paths could read exponentially many files.)
 const MAX_INCLUDED_FILES: usize = 1024;
-const MAX_TOTAL_INPUT: usize = 64 << 20;
+const MAX_TOTAL_INPUT: usize = 16 << 20;
 /// The preprocessed text never grows past this many bytes...
-const OUTPUT_CAP: usize = 64 << 20;
+const OUTPUT_CAP: usize = 16 << 20;
 /// ...nor past this many times the input (but always allows [`OUTPUT_FLOOR`]).
 const OUTPUT_FACTOR: usize = 32;
 const OUTPUT_FLOOR: usize = 1 << 20;
