@@ -81,7 +81,10 @@ pub struct FrontendOutput {
 impl FrontendOutput {
     /// The file and byte range a span of the checked shader stands for.
     pub fn locate(&self, span: parse::ast::Span) -> (FileId, std::ops::Range<usize>) {
-        self.preprocessed.map.locate(span.range()).unwrap_or((self.root, 0..0))
+        self.preprocessed
+            .map
+            .locate(span.range())
+            .unwrap_or((self.root, 0..0))
     }
 
     /// True when any diagnostic is an error.

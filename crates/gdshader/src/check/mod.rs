@@ -46,6 +46,9 @@ pub struct CheckedShader {
     pub render_modes: Vec<String>,
     /// Whether the shader defines `sky()`.
     pub has_sky: bool,
+    /// The declared type (and, for constants, the folded value when known) of every variable,
+    /// constant, parameter and function, keyed by the span of its name where it is declared.
+    pub declarations: HashMap<ast::Span, (Type, Option<ConstValue>)>,
 }
 
 impl CheckedShader {
@@ -156,6 +159,7 @@ pub fn check(shader: Shader) -> (CheckedShader, Vec<SpannedDiagnostic>) {
         builtins_used: BTreeSet::new(),
         render_modes: Vec::new(),
         has_sky: false,
+        declarations: HashMap::new(),
     };
     c.items(&shader);
     let checked = CheckedShader {
@@ -165,6 +169,7 @@ pub fn check(shader: Shader) -> (CheckedShader, Vec<SpannedDiagnostic>) {
         builtins_used: c.builtins_used,
         render_modes: c.render_modes,
         has_sky: c.has_sky,
+        declarations: c.declarations,
         ast: shader,
     };
     (checked, c.diags)
@@ -188,6 +193,7 @@ struct Checker {
     builtins_used: BTreeSet<&'static str>,
     render_modes: Vec<String>,
     has_sky: bool,
+    declarations: HashMap<ast::Span, (Type, Option<ConstValue>)>,
 }
 
 impl Checker {
@@ -570,6 +576,8 @@ impl Checker {
                     .or_insert(d.name.span);
                 continue;
             };
+            self.declarations
+                .insert(d.name.span, (ty.clone(), value.clone()));
             self.declare_global(&d.name, Global::Const { ty, value });
         }
     }
@@ -718,6 +726,7 @@ impl Checker {
                     "",
                 );
             }
+            self.declarations.insert(p.name.span, (ty.clone(), None));
             params.push((ty.clone(), p.qualifier));
             let is_const = p.qualifier == ast::ParamQualifier::Const;
             param_locals.insert(
@@ -731,6 +740,7 @@ impl Checker {
             );
         }
         let ret = ret.unwrap_or(Type::Void);
+        self.declarations.insert(f.name.span, (ret.clone(), None));
         let is_sky = f.name.name == "sky";
         if is_sky {
             if ret != Type::Void || !f.params.is_empty() {

@@ -311,6 +311,10 @@ impl Checker {
     }
 
     fn declare_local(&mut self, name: &ast::Ident, local: Local) {
+        if let Some(ty) = &local.ty {
+            self.declarations
+                .insert(name.span, (ty.clone(), local.value.clone()));
+        }
         // Godot checks the current block and the globals; an outer block's local may be shadowed.
         let clash = self
             .scopes

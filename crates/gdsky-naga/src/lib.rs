@@ -1,0 +1,154 @@
+//! # gdsky-naga: Godot sky shaders as naga IR
+//!
+//! Takes the front end's [`CheckedShader`](gdshader::CheckedShader) and builds a
+//! [`naga::Module`] directly — arenas, types, constants, globals, functions and entry points —
+//! with no GLSL or WGSL text in between, then validates it with naga and writes WGSL and
+//! SPIR-V with naga's back ends.
+//!
+//! * `lower/` walks the checked tree and builds the module (see its essay for the semantics
+//!   written out explicitly: floored `mod`, NaN-proof `max`/`min`/`clamp`, lazy `&&`/`?:`,
+//!   copy-in/copy-out `out` arguments, `bool` uniforms as `u32`).
+//! * `wrapper.rs` adds Godot's sky wrapper: the built-ins uniform (group 0), per-pixel
+//!   built-ins, the fullscreen-triangle vertex entry and one fragment entry per projection.
+//!
+//! Every naga expression carries the span of the shader text it came from, so a validation
+//! error is reported at the user's file and line ([`lower`] maps it through the source map);
+//! code the wrapper injects carries no span and is reported as the wrapper's.
+
+mod lower;
+pub mod wrapper;
+
+pub use lower::{MATERIAL_GROUP, UniformSlot};
+pub use wrapper::Projection;
+
+use gdshader::parse::ast;
+use gdshader::{Diagnostic, FrontendOutput};
+use naga::valid::{Capabilities, ModuleInfo, ValidationFlags, Validator};
+use std::collections::HashMap;
+
+/// Diagnostic code for a construct the lowering does not support yet.
+pub const UNSUPPORTED: &str = "E600";
+/// Diagnostic code for a module naga's validator rejects (a bug in gdsky's lowering).
+pub const INVALID_MODULE: &str = "E601";
+/// Diagnostic code for a back end that could not write the module.
+pub const BACKEND: &str = "E602";
+
+/// Something the lowering could not translate, at a span of the checked shader.
+#[derive(Clone, Debug)]
+pub struct LowerError {
+    span: ast::Span,
+    message: String,
+}
+
+/// A validated naga module of a sky shader.
+pub struct Lowered {
+    /// The module.
+    pub module: naga::Module,
+    /// naga's validation result, which the back ends need.
+    pub info: ModuleInfo,
+    /// Where each uniform lives in the material block (group [`MATERIAL_GROUP`], binding 0).
+    pub uniforms: HashMap<String, UniformSlot>,
+    /// Size in bytes of the material block (0 when the shader has no uniforms).
+    pub material_size: u32,
+}
+
+/// Lowers and validates a checked shader. Errors come back as diagnostics located in the
+/// user's files.
+pub fn lower(front: &FrontendOutput) -> Result<Lowered, Vec<Diagnostic>> {
+    let Some(shader) = front.shader.as_ref() else {
+        return Err(front.diagnostics.clone());
+    };
+    let mut lw = lower::Lowerer::new(shader);
+    lw.items();
+    if !lw.errors.is_empty() {
+        return Err(lw
+            .errors
+            .iter()
+            .map(|e| {
+                let (file, range) = front.locate(e.span);
+                Diagnostic::error(UNSUPPORTED, e.message.clone()).with_primary(file, range, "")
+            })
+            .collect());
+    }
+    let uniforms = lw.uniforms;
+    let material_size = lw.material_size;
+    let module = lw.module;
+    match validator().validate(&module) {
+        Ok(info) => Ok(Lowered {
+            module,
+            info,
+            uniforms,
+            material_size,
+        }),
+        Err(err) => Err(vec![validation_diagnostic(front, &err)]),
+    }
+}
+
+/// The validator gdsky uses: everything checked except uniformity of control flow, since GLSL
+/// (and so Godot) allows derivatives and implicit-LOD sampling in non-uniform control flow.
+pub fn validator() -> Validator {
+    Validator::new(
+        ValidationFlags::all() - ValidationFlags::CONTROL_FLOW_UNIFORMITY,
+        Capabilities::default(),
+    )
+}
+
+/// A naga validation error as a diagnostic at the shader's own lines.
+fn validation_diagnostic(
+    front: &FrontendOutput,
+    err: &naga::WithSpan<naga::valid::ValidationError>,
+) -> Diagnostic {
+    let mut chain = Vec::new();
+    let mut source: Option<&dyn std::error::Error> = std::error::Error::source(err.as_inner());
+    while let Some(s) = source {
+        chain.push(s.to_string());
+        source = s.source();
+    }
+    let mut d = Diagnostic::error(
+        INVALID_MODULE,
+        format!("naga rejected the translated shader: {}", err.as_inner()),
+    )
+    .with_note("this is a bug in gdsky's translation, not in the shader; please report it")
+    .with_notes(chain);
+    let mut labelled = false;
+    for (span, label) in err.spans() {
+        if let Some(range) = span.to_range() {
+            let (file, range) = front.locate(ast::Span::new(range.start, range.end));
+            let primary = !labelled;
+            d.labels.push(gdshader::Label {
+                file,
+                range,
+                message: label.clone(),
+                primary,
+            });
+            labelled = true;
+        }
+    }
+    if !labelled {
+        d.notes.push(
+            "the problem is in code gdsky's sky wrapper adds, which has no place in the shader"
+                .into(),
+        );
+    }
+    d
+}
+
+/// Writes the module as WGSL.
+pub fn to_wgsl(lowered: &Lowered) -> Result<String, naga::back::wgsl::Error> {
+    naga::back::wgsl::write_string(
+        &lowered.module,
+        &lowered.info,
+        naga::back::wgsl::WriterFlags::empty(),
+    )
+}
+
+/// Writes the module as SPIR-V 1.3 for Vulkan, every entry point in one module. The vertex
+/// position is written in Vulkan's clip space as wgpu expects (naga's default adjustment).
+pub fn to_spirv(lowered: &Lowered) -> Result<Vec<u32>, naga::back::spv::Error> {
+    let options = naga::back::spv::Options {
+        lang_version: (1, 3),
+        fake_missing_bindings: true,
+        ..Default::default()
+    };
+    naga::back::spv::write_vec(&lowered.module, &lowered.info, &options, None)
+}

@@ -1,0 +1,487 @@
+//! Built-in function calls: Godot's (GLSL's) functions as naga math, relational and conversion
+//! expressions, with the semantics GLSL gives them where naga's differ.
+
+use super::builder::FnBuilder;
+use super::expr::FnCtx;
+use super::{span, vector_size};
+use gdshader::check::types::{Scalar as GdScalar, Type as GdType};
+use gdshader::parse::ast::{self, Expr};
+use naga::{
+    BinaryOperator as Bo, DerivativeAxis, DerivativeControl, Expression as E, Handle,
+    MathFunction as Mf, RelationalFunction, ScalarKind, Statement, UnaryOperator,
+};
+
+type H = Handle<E>;
+
+/// Lowers a call of a built-in function (arguments already type-checked by the checker).
+pub(super) fn builtin(
+    ctx: &mut FnCtx,
+    b: &mut FnBuilder,
+    e: &Expr,
+    callee: &ast::Ident,
+    args: &[Expr],
+    types: &[GdType],
+) -> Option<H> {
+    let sp = span(e.span);
+    let name = callee.name.as_str();
+    // Functions with an `out` argument take the place, not its value.
+    match name {
+        "modf" | "frexp" => return out_struct_call(ctx, b, e, name, args),
+        "ldexp" => {
+            let x = ctx.value(b, &args[0])?;
+            let ex = ctx.value(b, &args[1])?;
+            return Some(math(b, Mf::Ldexp, &[x, ex], sp));
+        }
+        _ => {}
+    }
+    let v: Vec<H> = args
+        .iter()
+        .map(|a| ctx.value(b, a))
+        .collect::<Option<_>>()?;
+    let shape = types
+        .iter()
+        .filter_map(|t| match t {
+            GdType::Vector(_, n) => Some(*n),
+            _ => None,
+        })
+        .max();
+    // Scalars among vector arguments are splatted: naga wants one type for all of them.
+    let splat = |b: &mut FnBuilder, h: H, t: &GdType| match (t, shape) {
+        (GdType::Scalar(_), Some(n)) => b.expr(
+            E::Splat {
+                size: vector_size(n),
+                value: h,
+            },
+            sp,
+        ),
+        _ => h,
+    };
+    let is_float = types.first().and_then(GdType::scalar) == Some(GdScalar::Float);
+    // naga's geometric functions take vectors; GLSL's also take floats.
+    if matches!(types.first(), Some(GdType::Scalar(_))) {
+        match name {
+            "length" => return Some(math(b, Mf::Abs, &v, sp)),
+            "normalize" => return Some(math(b, Mf::Sign, &v, sp)),
+            "distance" => {
+                let d = b.expr(
+                    E::Binary {
+                        op: Bo::Subtract,
+                        left: v[0],
+                        right: v[1],
+                    },
+                    sp,
+                );
+                return Some(math(b, Mf::Abs, &[d], sp));
+            }
+            _ => {}
+        }
+    }
+    let unary_math = |fun| -> Option<Mf> { Some(fun) };
+    let one = match name {
+        "radians" => unary_math(Mf::Radians),
+        "degrees" => unary_math(Mf::Degrees),
+        "sin" => unary_math(Mf::Sin),
+        "cos" => unary_math(Mf::Cos),
+        "tan" => unary_math(Mf::Tan),
+        "asin" => unary_math(Mf::Asin),
+        "acos" => unary_math(Mf::Acos),
+        "atan" if args.len() == 1 => unary_math(Mf::Atan),
+        "sinh" => unary_math(Mf::Sinh),
+        "cosh" => unary_math(Mf::Cosh),
+        "tanh" => unary_math(Mf::Tanh),
+        "asinh" => unary_math(Mf::Asinh),
+        "acosh" => unary_math(Mf::Acosh),
+        "atanh" => unary_math(Mf::Atanh),
+        "exp" => unary_math(Mf::Exp),
+        "log" => unary_math(Mf::Log),
+        "exp2" => unary_math(Mf::Exp2),
+        "log2" => unary_math(Mf::Log2),
+        "sqrt" => unary_math(Mf::Sqrt),
+        "inversesqrt" => unary_math(Mf::InverseSqrt),
+        "abs" => unary_math(Mf::Abs),
+        "sign" => unary_math(Mf::Sign),
+        "floor" => unary_math(Mf::Floor),
+        "round" | "roundEven" => unary_math(Mf::Round),
+        "trunc" => unary_math(Mf::Trunc),
+        "ceil" => unary_math(Mf::Ceil),
+        "fract" => unary_math(Mf::Fract),
+        "length" => unary_math(Mf::Length),
+        "normalize" => unary_math(Mf::Normalize),
+        "transpose" => unary_math(Mf::Transpose),
+        "determinant" => unary_math(Mf::Determinant),
+        "bitCount" => unary_math(Mf::CountOneBits),
+        "bitfieldReverse" => unary_math(Mf::ReverseBits),
+        "findLSB" => unary_math(Mf::FirstTrailingBit),
+        "findMSB" => unary_math(Mf::FirstLeadingBit),
+        "packHalf2x16" => unary_math(Mf::Pack2x16float),
+        "unpackHalf2x16" => unary_math(Mf::Unpack2x16float),
+        "packUnorm2x16" => unary_math(Mf::Pack2x16unorm),
+        "unpackUnorm2x16" => unary_math(Mf::Unpack2x16unorm),
+        "packSnorm2x16" => unary_math(Mf::Pack2x16snorm),
+        "unpackSnorm2x16" => unary_math(Mf::Unpack2x16snorm),
+        "packUnorm4x8" => unary_math(Mf::Pack4x8unorm),
+        "unpackUnorm4x8" => unary_math(Mf::Unpack4x8unorm),
+        "packSnorm4x8" => unary_math(Mf::Pack4x8snorm),
+        "unpackSnorm4x8" => unary_math(Mf::Unpack4x8snorm),
+        _ => None,
+    };
+    if let Some(fun) = one {
+        return Some(math(b, fun, &v, sp));
+    }
+    let h = match name {
+        "atan" => math(b, Mf::Atan2, &v, sp),
+        "pow" => math(b, Mf::Pow, &v, sp),
+        "distance" => math(b, Mf::Distance, &v, sp),
+        "dot" if matches!(types[0], GdType::Scalar(_)) => b.expr(
+            E::Binary {
+                op: Bo::Multiply,
+                left: v[0],
+                right: v[1],
+            },
+            sp,
+        ),
+        "dot" => math(b, Mf::Dot, &v, sp),
+        "cross" => math(b, Mf::Cross, &v, sp),
+        "reflect" => math(b, Mf::Reflect, &v, sp),
+        "refract" => math(b, Mf::Refract, &v, sp),
+        "faceforward" => math(b, Mf::FaceForward, &v, sp),
+        "outerProduct" => math(b, Mf::Outer, &v, sp),
+        "fma" => math(b, Mf::Fma, &v, sp),
+        "step" => {
+            let (edge, x) = (splat(b, v[0], &types[0]), v[1]);
+            math(b, Mf::Step, &[edge, x], sp)
+        }
+        "smoothstep" => {
+            let (lo, hi) = (splat(b, v[0], &types[0]), splat(b, v[1], &types[1]));
+            math(b, Mf::SmoothStep, &[lo, hi, v[2]], sp)
+        }
+        "mix" if types[2].scalar() == Some(GdScalar::Bool) => b.expr(
+            E::Select {
+                condition: v[2],
+                accept: v[1],
+                reject: v[0],
+            },
+            sp,
+        ),
+        "mix" => math(b, Mf::Mix, &v, sp),
+        "mod" => {
+            // GLSL's mod is floored: x - y * floor(x / y). naga's Modulo truncates.
+            let y = splat(b, v[1], &types[1]);
+            let q = b.expr(
+                E::Binary {
+                    op: Bo::Divide,
+                    left: v[0],
+                    right: y,
+                },
+                sp,
+            );
+            let f = math(b, Mf::Floor, &[q], sp);
+            let m = b.expr(
+                E::Binary {
+                    op: Bo::Multiply,
+                    left: y,
+                    right: f,
+                },
+                sp,
+            );
+            b.expr(
+                E::Binary {
+                    op: Bo::Subtract,
+                    left: v[0],
+                    right: m,
+                },
+                sp,
+            )
+        }
+        "min" | "max" => {
+            let (x, y) = (v[0], splat(b, v[1], &types[1]));
+            let fun = if name == "min" { Mf::Min } else { Mf::Max };
+            if is_float {
+                max_num(b, fun, x, y, shape, sp)
+            } else {
+                math(b, fun, &[x, y], sp)
+            }
+        }
+        "clamp" => {
+            let (x, lo, hi) = (v[0], splat(b, v[1], &types[1]), splat(b, v[2], &types[2]));
+            if is_float {
+                let m = max_num(b, Mf::Max, x, lo, shape, sp);
+                max_num(b, Mf::Min, m, hi, shape, sp)
+            } else {
+                math(b, Mf::Clamp, &[x, lo, hi], sp)
+            }
+        }
+        "isnan" => float_class(b, v[0], shape, Class::Nan, sp),
+        "isinf" => float_class(b, v[0], shape, Class::Inf, sp),
+        "any" => b.expr(
+            E::Relational {
+                fun: RelationalFunction::Any,
+                argument: v[0],
+            },
+            sp,
+        ),
+        "all" => b.expr(
+            E::Relational {
+                fun: RelationalFunction::All,
+                argument: v[0],
+            },
+            sp,
+        ),
+        "not" => b.expr(
+            E::Unary {
+                op: UnaryOperator::LogicalNot,
+                expr: v[0],
+            },
+            sp,
+        ),
+        "lessThan" => b.expr(
+            E::Binary {
+                op: Bo::Less,
+                left: v[0],
+                right: v[1],
+            },
+            sp,
+        ),
+        "lessThanEqual" => b.expr(
+            E::Binary {
+                op: Bo::LessEqual,
+                left: v[0],
+                right: v[1],
+            },
+            sp,
+        ),
+        "greaterThan" => b.expr(
+            E::Binary {
+                op: Bo::Greater,
+                left: v[0],
+                right: v[1],
+            },
+            sp,
+        ),
+        "greaterThanEqual" => b.expr(
+            E::Binary {
+                op: Bo::GreaterEqual,
+                left: v[0],
+                right: v[1],
+            },
+            sp,
+        ),
+        "equal" => b.expr(
+            E::Binary {
+                op: Bo::Equal,
+                left: v[0],
+                right: v[1],
+            },
+            sp,
+        ),
+        "notEqual" => b.expr(
+            E::Binary {
+                op: Bo::NotEqual,
+                left: v[0],
+                right: v[1],
+            },
+            sp,
+        ),
+        "floatBitsToInt" => b.expr(
+            E::As {
+                expr: v[0],
+                kind: ScalarKind::Sint,
+                convert: None,
+            },
+            sp,
+        ),
+        "floatBitsToUint" => b.expr(
+            E::As {
+                expr: v[0],
+                kind: ScalarKind::Uint,
+                convert: None,
+            },
+            sp,
+        ),
+        "intBitsToFloat" | "uintBitsToFloat" => b.expr(
+            E::As {
+                expr: v[0],
+                kind: ScalarKind::Float,
+                convert: None,
+            },
+            sp,
+        ),
+        "bitfieldExtract" => {
+            let (o, c) = (
+                to_u32(ctx, b, v[1], args[1].span),
+                to_u32(ctx, b, v[2], args[2].span),
+            );
+            math(b, Mf::ExtractBits, &[v[0], o, c], sp)
+        }
+        "bitfieldInsert" => {
+            let (o, c) = (
+                to_u32(ctx, b, v[2], args[2].span),
+                to_u32(ctx, b, v[3], args[3].span),
+            );
+            math(b, Mf::InsertBits, &[v[0], v[1], o, c], sp)
+        }
+        "dFdx" | "dFdy" | "fwidth" | "dFdxCoarse" | "dFdyCoarse" | "fwidthCoarse" | "dFdxFine"
+        | "dFdyFine" | "fwidthFine" => {
+            let axis = match &name[..2] {
+                "dF" if name.as_bytes()[3] == b'x' => DerivativeAxis::X,
+                "dF" => DerivativeAxis::Y,
+                _ => DerivativeAxis::Width,
+            };
+            let ctrl = if name.ends_with("Coarse") {
+                DerivativeControl::Coarse
+            } else if name.ends_with("Fine") {
+                DerivativeControl::Fine
+            } else {
+                DerivativeControl::None
+            };
+            b.expr(
+                E::Derivative {
+                    axis,
+                    ctrl,
+                    expr: v[0],
+                },
+                sp,
+            )
+        }
+        _ => return ctx.unsupported(e, &format!("the built-in function `{name}`")),
+    };
+    Some(h)
+}
+
+fn math(b: &mut FnBuilder, fun: Mf, args: &[H], sp: naga::Span) -> H {
+    b.expr(
+        E::Math {
+            fun,
+            arg: args[0],
+            arg1: args.get(1).copied(),
+            arg2: args.get(2).copied(),
+            arg3: args.get(3).copied(),
+        },
+        sp,
+    )
+}
+
+/// `min`/`max` with IEEE maxNum semantics: a NaN operand yields the other one. GLSL leaves this
+/// undefined and SPIR-V's FMax too; Godot's drivers, and gdsky's reference, return the other.
+fn max_num(b: &mut FnBuilder, fun: Mf, x: H, y: H, n: Option<u8>, sp: naga::Span) -> H {
+    let m = math(b, fun, &[x, y], sp);
+    let x_nan = float_class(b, x, n, Class::Nan, sp);
+    let m = b.expr(
+        E::Select {
+            condition: x_nan,
+            accept: y,
+            reject: m,
+        },
+        sp,
+    );
+    let y_nan = float_class(b, y, n, Class::Nan, sp);
+    b.expr(
+        E::Select {
+            condition: y_nan,
+            accept: x,
+            reject: m,
+        },
+        sp,
+    )
+}
+
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Class {
+    Nan,
+    Inf,
+}
+
+/// `isnan` / `isinf` from the bits (WGSL has neither, and a compiler that assumes finite math
+/// may fold `x != x` away): |bits| > 0x7f800000 is NaN, == 0x7f800000 is infinity.
+fn float_class(b: &mut FnBuilder, x: H, n: Option<u8>, class: Class, sp: naga::Span) -> H {
+    let bits = b.expr(
+        E::As {
+            expr: x,
+            kind: ScalarKind::Uint,
+            convert: None,
+        },
+        sp,
+    );
+    let mut mask = b.expr(E::Literal(naga::Literal::U32(0x7fff_ffff)), sp);
+    let mut inf = b.expr(E::Literal(naga::Literal::U32(0x7f80_0000)), sp);
+    if let Some(n) = n {
+        mask = b.expr(
+            E::Splat {
+                size: vector_size(n),
+                value: mask,
+            },
+            sp,
+        );
+        inf = b.expr(
+            E::Splat {
+                size: vector_size(n),
+                value: inf,
+            },
+            sp,
+        );
+    }
+    let magnitude = b.expr(
+        E::Binary {
+            op: Bo::And,
+            left: bits,
+            right: mask,
+        },
+        sp,
+    );
+    let op = if class == Class::Nan {
+        Bo::Greater
+    } else {
+        Bo::Equal
+    };
+    b.expr(
+        E::Binary {
+            op,
+            left: magnitude,
+            right: inf,
+        },
+        sp,
+    )
+}
+
+fn to_u32(ctx: &mut FnCtx, b: &mut FnBuilder, v: H, at: ast::Span) -> H {
+    ctx.convert(b, v, &GdType::INT, GdScalar::UInt, at)
+}
+
+/// `modf(x, out i)` and `frexp(x, out e)`: naga returns a struct of both results.
+fn out_struct_call(
+    ctx: &mut FnCtx,
+    b: &mut FnBuilder,
+    e: &Expr,
+    name: &str,
+    args: &[Expr],
+) -> Option<H> {
+    let sp = span(e.span);
+    let x = ctx.value(b, &args[0])?;
+    let fun = if name == "modf" { Mf::Modf } else { Mf::Frexp };
+    let both = math(b, fun, &[x], sp);
+    let first = b.expr(
+        E::AccessIndex {
+            base: both,
+            index: 0,
+        },
+        sp,
+    );
+    let second = b.expr(
+        E::AccessIndex {
+            base: both,
+            index: 1,
+        },
+        sp,
+    );
+    let Some(super::expr::Val::Pointer(ptr)) = ctx.lower(b, &args[1]) else {
+        return ctx.unsupported(e, &format!("`{name}` with this output argument"));
+    };
+    b.stmt(
+        Statement::Store {
+            pointer: ptr,
+            value: second,
+        },
+        sp,
+    );
+    Some(first)
+}

@@ -1,0 +1,520 @@
+//! Checked AST → `naga::Module`, directly: types, constants, the material uniform block,
+//! functions, and (in `wrapper.rs`) Godot's sky entry points.
+//!
+//! The tree the checker accepted is walked once, in source order, as Godot reads it: structs,
+//! constants and uniforms become module items as they are met, and each function is lowered
+//! after everything it can call. Types come from the checker's side table (`expr_types`), which
+//! already records the type Godot converts an int literal to, so the lowering never re-infers a
+//! type. Names are resolved again here with Godot's scoping, which is simple once the shader is
+//! known to be valid.
+//!
+//! Semantics that GLSL and WGSL disagree on are written out explicitly: `mod` is floored,
+//! `max`/`min`/`clamp` return the other operand for a NaN (IEEE maxNum, as Godot's GLSL drivers
+//! do), `&&`/`||`/`?:` are lazy where an operand has side effects, `out` arguments are copied
+//! in and out, and `bool` uniforms travel as `u32`.
+
+mod builder;
+mod calls;
+mod expr;
+mod stmt;
+
+pub(crate) use builder::FnBuilder;
+pub(crate) use expr::Val;
+
+use crate::LowerError;
+use crate::wrapper::Builtins;
+use gdshader::CheckedShader;
+use gdshader::check::consteval::ConstValue;
+use gdshader::check::types::{Scalar as GdScalar, Type as GdType};
+use gdshader::parse::ast::{self, ItemKind, ParamQualifier};
+use naga::proc::{Alignment, Layouter};
+use naga::{
+    AddressSpace, ArraySize, Constant, Expression, Function, GlobalVariable, Handle, Literal,
+    MemoryDecorations, Module, ResourceBinding, Scalar, Span, StructMember, Type, TypeInner,
+    VectorSize,
+};
+use std::collections::HashMap;
+use std::num::NonZeroU32;
+
+/// The bind group of the material uniform block and its textures.
+pub const MATERIAL_GROUP: u32 = 1;
+
+/// Where a uniform lives in the material block.
+#[derive(Clone, Debug)]
+pub struct UniformSlot {
+    /// Member index in the material struct.
+    pub member: u32,
+    /// The shader's type of the uniform.
+    pub ty: GdType,
+    /// Byte offset in the block.
+    pub offset: u32,
+    /// Byte size.
+    pub size: u32,
+}
+
+/// A global `const`.
+#[derive(Clone)]
+enum GlobalConst {
+    /// Folded by the checker into a module constant.
+    Module(Handle<Constant>),
+    /// Not foldable here (e.g. `sin(1.0)`): its initializer is lowered at each use.
+    Inline(Box<ast::Expr>),
+}
+
+/// A user function: its signature and handle.
+#[derive(Clone)]
+struct UserFn {
+    params: Vec<(GdType, ParamQualifier)>,
+    ret: GdType,
+    handle: Handle<Function>,
+}
+
+/// Module-level state of one lowering.
+pub(crate) struct Lowerer<'a> {
+    pub shader: &'a CheckedShader,
+    pub module: Module,
+    layouter: Layouter,
+    types: HashMap<GdType, Handle<Type>>,
+    struct_types: Vec<Handle<Type>>,
+    material: Option<Handle<GlobalVariable>>,
+    pub uniforms: HashMap<String, UniformSlot>,
+    /// Size in bytes of the material block (0 when there is none).
+    pub material_size: u32,
+    pub builtins: Builtins,
+    constants: HashMap<String, GlobalConst>,
+    functions: HashMap<String, Vec<UserFn>>,
+    pub sky_function: Option<Handle<Function>>,
+    pub errors: Vec<LowerError>,
+}
+
+pub(crate) fn span(s: ast::Span) -> Span {
+    // naga treats (0, 0) as "no span"; every node of ours has a real one except the file start.
+    Span::new(s.start, s.end.max(s.start + 1))
+}
+
+impl<'a> Lowerer<'a> {
+    pub fn new(shader: &'a CheckedShader) -> Self {
+        Lowerer {
+            shader,
+            module: Module::default(),
+            layouter: Layouter::default(),
+            types: HashMap::new(),
+            struct_types: Vec::new(),
+            material: None,
+            uniforms: HashMap::new(),
+            material_size: 0,
+            builtins: Builtins::default(),
+            constants: HashMap::new(),
+            functions: HashMap::new(),
+            sky_function: None,
+            errors: Vec::new(),
+        }
+    }
+
+    pub fn error(&mut self, at: ast::Span, message: impl Into<String>) {
+        self.errors.push(LowerError {
+            span: at,
+            message: message.into(),
+        });
+    }
+
+    /// Lowers every item of the shader, then adds the entry points.
+    pub fn items(&mut self) {
+        let shader = self.shader;
+        self.structs();
+        Builtins::declare(self);
+        self.material_block();
+        for item in &shader.ast.items {
+            match &item.kind {
+                ItemKind::Const(decl) => {
+                    for d in &decl.declarators {
+                        self.global_const(d);
+                    }
+                }
+                ItemKind::Function(f) => self.function(f),
+                _ => {}
+            }
+        }
+        crate::wrapper::entry_points(self);
+    }
+
+    fn structs(&mut self) {
+        for s in &self.shader.structs {
+            let members: Vec<(String, Handle<Type>)> = s
+                .members
+                .iter()
+                .filter_map(|(n, t)| Some((n.clone(), self.ty(t, ast::Span::default())?)))
+                .collect();
+            let h = self.struct_type(&s.name, &members, false);
+            self.struct_types.push(h);
+        }
+    }
+
+    /// Lays out a struct: natural (WGSL) layout, with the uniform rules when `uniform`.
+    pub fn struct_type(
+        &mut self,
+        name: &str,
+        members: &[(String, Handle<Type>)],
+        uniform: bool,
+    ) -> Handle<Type> {
+        let _ = self.layouter.update(self.module.to_ctx());
+        let mut offset = 0u32;
+        let mut align = Alignment::ONE;
+        let mut out = Vec::new();
+        for (mname, mty) in members {
+            let layout = self.layouter[*mty];
+            let mut a = layout.alignment;
+            if uniform && matches!(self.module.types[*mty].inner, TypeInner::Struct { .. }) {
+                a = a.max(Alignment::MIN_UNIFORM);
+            }
+            offset = a.round_up(offset);
+            out.push(StructMember {
+                name: Some(mname.clone()),
+                ty: *mty,
+                binding: None,
+                offset,
+            });
+            offset += layout.size;
+            align = align.max(a);
+        }
+        let span = align.round_up(offset);
+        self.module.types.insert(
+            Type {
+                name: Some(name.into()),
+                inner: TypeInner::Struct { members: out, span },
+            },
+            Span::UNDEFINED,
+        )
+    }
+
+    /// An array for a uniform block: its stride rounded up to 16 bytes, as the uniform address
+    /// space requires (a no-op for structs and 4-vectors).
+    pub fn uniform_array(&mut self, base: Handle<Type>, n: u32) -> Handle<Type> {
+        let _ = self.layouter.update(self.module.to_ctx());
+        let stride = Alignment::MIN_UNIFORM.round_up(self.layouter[base].to_stride());
+        let size = ArraySize::Constant(NonZeroU32::new(n).unwrap_or(NonZeroU32::MIN));
+        self.module.types.insert(
+            Type {
+                name: None,
+                inner: TypeInner::Array { base, size, stride },
+            },
+            Span::UNDEFINED,
+        )
+    }
+
+    /// The naga type of a shader type (natural layout; `None` after reporting what cannot be
+    /// translated).
+    pub fn ty(&mut self, ty: &GdType, at: ast::Span) -> Option<Handle<Type>> {
+        if let Some(h) = self.types.get(ty) {
+            return Some(*h);
+        }
+        let inner = match ty {
+            GdType::Scalar(s) => TypeInner::Scalar(scalar(*s)),
+            GdType::Vector(s, n) => TypeInner::Vector {
+                size: vector_size(*n),
+                scalar: scalar(*s),
+            },
+            GdType::Matrix(n) => TypeInner::Matrix {
+                columns: vector_size(*n),
+                rows: vector_size(*n),
+                scalar: Scalar::F32,
+            },
+            GdType::Struct(id) => return self.struct_types.get(id.0 as usize).copied(),
+            GdType::Array(elem, n) => {
+                let base = self.ty(elem, at)?;
+                let _ = self.layouter.update(self.module.to_ctx());
+                let stride = self.layouter[base].to_stride();
+                TypeInner::Array {
+                    base,
+                    size: ArraySize::Constant(NonZeroU32::new(*n).unwrap_or(NonZeroU32::MIN)),
+                    stride,
+                }
+            }
+            GdType::Void | GdType::Sampler(..) => {
+                self.error(
+                    at,
+                    format!(
+                        "gdsky cannot translate values of type `{}` yet",
+                        ty.display(&self.shader.struct_names())
+                    ),
+                );
+                return None;
+            }
+        };
+        let h = self
+            .module
+            .types
+            .insert(Type { name: None, inner }, Span::UNDEFINED);
+        self.types.insert(ty.clone(), h);
+        Some(h)
+    }
+
+    /// The type a uniform travels as: `bool` as `u32` (bool is not host-shareable).
+    fn uniform_ty(&mut self, ty: &GdType, at: ast::Span) -> Option<Handle<Type>> {
+        match ty {
+            GdType::Scalar(GdScalar::Bool) => self.ty(&GdType::UINT, at),
+            GdType::Vector(GdScalar::Bool, n) => self.ty(&GdType::Vector(GdScalar::UInt, *n), at),
+            GdType::Array(elem, _)
+                if matches!(**elem, GdType::Scalar(_) | GdType::Vector(_, 2)) =>
+            {
+                // WGSL requires a 16-byte array stride in uniform buffers, which a float or vec2
+                // array does not have in WGSL's layout.
+                self.error(at, "gdsky cannot translate uniform arrays of scalars or 2-vectors yet (WGSL needs a 16-byte stride)");
+                None
+            }
+            GdType::Sampler(..) => {
+                self.error(at, "gdsky cannot translate sampler uniforms yet");
+                None
+            }
+            other => self.ty(other, at),
+        }
+    }
+
+    /// The material block: every non-sampler uniform, in declaration order, laid out by naga's
+    /// layouter with the uniform address space's rules.
+    fn material_block(&mut self) {
+        let shader = self.shader;
+        let mut members = Vec::new();
+        let mut names = Vec::new();
+        for u in shader.uniforms.iter().filter(|u| !u.global) {
+            let at = self.uniform_span(&u.name);
+            let Some(h) = self.uniform_ty(&u.ty, at) else {
+                continue;
+            };
+            members.push((u.name.clone(), h));
+            names.push((u.name.clone(), u.ty.clone()));
+        }
+        for u in shader.uniforms.iter().filter(|u| u.global) {
+            let at = self.uniform_span(&u.name);
+            self.error(at, format!("gdsky cannot translate `global uniform {}` yet (Godot's global uniform buffer)", u.name));
+        }
+        if members.is_empty() {
+            return;
+        }
+        let ty = self.struct_type("Material", &members, true);
+        if let TypeInner::Struct {
+            members: laid,
+            span,
+        } = &self.module.types[ty].inner
+        {
+            self.material_size = *span;
+            let _ = self.layouter.update(self.module.to_ctx());
+            for (i, ((name, gd), m)) in names.into_iter().zip(laid).enumerate() {
+                let size = self.layouter[m.ty].size;
+                self.uniforms.insert(
+                    name,
+                    UniformSlot {
+                        member: i as u32,
+                        ty: gd,
+                        offset: m.offset,
+                        size,
+                    },
+                );
+            }
+        }
+        let global = self.module.global_variables.append(
+            GlobalVariable {
+                name: Some("material".into()),
+                space: AddressSpace::Uniform,
+                binding: Some(ResourceBinding {
+                    group: MATERIAL_GROUP,
+                    binding: 0,
+                }),
+                ty,
+                init: None,
+                memory_decorations: MemoryDecorations::empty(),
+            },
+            Span::UNDEFINED,
+        );
+        self.material = Some(global);
+    }
+
+    fn uniform_span(&self, name: &str) -> ast::Span {
+        self.shader
+            .ast
+            .items
+            .iter()
+            .find_map(|i| match &i.kind {
+                ItemKind::Uniform(u) if u.name.name == name => Some(u.name.span),
+                _ => None,
+            })
+            .unwrap_or_default()
+    }
+
+    fn global_const(&mut self, d: &ast::Declarator) {
+        let Some(init) = &d.init else { return };
+        let lowered = match self.shader.declarations.get(&d.name.span).cloned() {
+            Some((ty, Some(value))) => {
+                let Some(th) = self.ty(&ty, d.name.span) else {
+                    return;
+                };
+                match self.const_expr(&ty, &value, d.name.span) {
+                    Some(init_h) => {
+                        let c = self.module.constants.append(
+                            Constant {
+                                name: Some(d.name.name.clone()),
+                                ty: th,
+                                init: init_h,
+                            },
+                            span(d.span),
+                        );
+                        GlobalConst::Module(c)
+                    }
+                    None => GlobalConst::Inline(Box::new(init.clone())),
+                }
+            }
+            _ => GlobalConst::Inline(Box::new(init.clone())),
+        };
+        self.constants.insert(d.name.name.clone(), lowered);
+    }
+
+    /// A constant value as a global const-expression.
+    fn const_expr(
+        &mut self,
+        ty: &GdType,
+        value: &ConstValue,
+        at: ast::Span,
+    ) -> Option<Handle<Expression>> {
+        let sp = span(at);
+        let h = match (ty, value) {
+            (GdType::Scalar(s), v) => {
+                let lit = literal(*s, v)?;
+                self.module
+                    .global_expressions
+                    .append(Expression::Literal(lit), sp)
+            }
+            (GdType::Vector(s, n), ConstValue::Composite(items)) if items.len() == *n as usize => {
+                let th = self.ty(ty, at)?;
+                let mut components = Vec::new();
+                for item in items {
+                    let lit = literal(*s, item)?;
+                    components.push(
+                        self.module
+                            .global_expressions
+                            .append(Expression::Literal(lit), sp),
+                    );
+                }
+                self.module
+                    .global_expressions
+                    .append(Expression::Compose { ty: th, components }, sp)
+            }
+            (GdType::Array(elem, n), ConstValue::Composite(items))
+                if items.len() == *n as usize =>
+            {
+                let th = self.ty(ty, at)?;
+                let mut components = Vec::new();
+                for item in items {
+                    components.push(self.const_expr(elem, item, at)?);
+                }
+                self.module
+                    .global_expressions
+                    .append(Expression::Compose { ty: th, components }, sp)
+            }
+            _ => return None,
+        };
+        Some(h)
+    }
+
+    /// The declared type of the name declared at `at`.
+    pub fn declared(&self, at: ast::Span) -> Option<GdType> {
+        self.shader.declarations.get(&at).map(|(t, _)| t.clone())
+    }
+
+    fn function(&mut self, f: &ast::Function) {
+        let Some(ret) = self.declared(f.name.span) else {
+            return;
+        };
+        let params: Vec<(GdType, ParamQualifier)> = f
+            .params
+            .iter()
+            .filter_map(|p| Some((self.declared(p.name.span)?, p.qualifier)))
+            .collect();
+        if params.len() != f.params.len() {
+            self.error(
+                f.name.span,
+                "internal: a parameter of this function has no recorded type",
+            );
+            return;
+        }
+        let mut b = FnBuilder::new(&f.name.name);
+        for (p, (ty, q)) in f.params.iter().zip(&params) {
+            let Some(th) = self.ty(ty, p.ty.span) else {
+                return;
+            };
+            let arg_ty = if matches!(q, ParamQualifier::Out | ParamQualifier::InOut) {
+                self.module.types.insert(
+                    Type {
+                        name: None,
+                        inner: TypeInner::Pointer {
+                            base: th,
+                            space: AddressSpace::Function,
+                        },
+                    },
+                    Span::UNDEFINED,
+                )
+            } else {
+                th
+            };
+            b.function.arguments.push(naga::FunctionArgument {
+                name: Some(p.name.name.clone()),
+                ty: arg_ty,
+                binding: None,
+            });
+        }
+        if ret != GdType::Void {
+            let Some(th) = self.ty(&ret, f.return_type.span) else {
+                return;
+            };
+            b.function.result = Some(naga::FunctionResult {
+                ty: th,
+                binding: None,
+            });
+        }
+        let is_sky = f.name.name == "sky";
+        let mut ctx = expr::FnCtx::new(self, ret.clone());
+        ctx.params(&mut b, f, &params);
+        ctx.block(&mut b, &f.body.stmts);
+        let function = b.finish();
+        let handle = self.module.functions.append(function, span(f.name.span));
+        if is_sky {
+            self.sky_function = Some(handle);
+        }
+        self.functions
+            .entry(f.name.name.clone())
+            .or_default()
+            .push(UserFn {
+                params,
+                ret,
+                handle,
+            });
+    }
+}
+
+pub(crate) fn scalar(s: GdScalar) -> Scalar {
+    match s {
+        GdScalar::Bool => Scalar::BOOL,
+        GdScalar::Int => Scalar::I32,
+        GdScalar::UInt => Scalar::U32,
+        GdScalar::Float => Scalar::F32,
+    }
+}
+
+pub(crate) fn vector_size(n: u8) -> VectorSize {
+    match n {
+        2 => VectorSize::Bi,
+        3 => VectorSize::Tri,
+        _ => VectorSize::Quad,
+    }
+}
+
+/// A scalar constant as a naga literal of the given kind.
+pub(crate) fn literal(s: GdScalar, v: &ConstValue) -> Option<Literal> {
+    let v = v.convert(s)?;
+    Some(match v {
+        ConstValue::Bool(b) => Literal::Bool(b),
+        ConstValue::Int(i) => Literal::I32(i as i32),
+        ConstValue::UInt(u) => Literal::U32(u as u32),
+        ConstValue::Float(f) => Literal::F32(f as f32),
+        ConstValue::Composite(_) => return None,
+    })
+}

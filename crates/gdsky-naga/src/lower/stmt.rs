@@ -1,0 +1,316 @@
+//! Statements: declarations, control flow, `return`.
+//!
+//! naga has structured control flow only (`If`, `Loop` with a `continuing` block, `Switch`), so
+//! GLSL's loops become `loop { if (!cond) { break; } body; continuing { step } }`, and a
+//! `switch` case that falls through gets the code of the cases it falls into (WGSL cannot fall
+//! through a non-empty case).
+
+use super::builder::FnBuilder;
+use super::expr::FnCtx;
+use super::span;
+use gdshader::parse::ast::{self, Stmt, StmtKind};
+use naga::{Block, Expression as E, Statement, SwitchCase, SwitchValue, UnaryOperator};
+
+impl FnCtx<'_, '_> {
+    /// Lowers statements in a new scope.
+    pub fn block(&mut self, b: &mut FnBuilder, stmts: &[Stmt]) {
+        self.push_scope();
+        for s in stmts {
+            self.stmt(b, s);
+        }
+        self.pop_scope();
+    }
+
+    /// A nested naga block holding `stmts`.
+    fn nested(&mut self, b: &mut FnBuilder, stmts: &[Stmt]) -> Block {
+        b.open();
+        self.block(b, stmts);
+        b.close()
+    }
+
+    fn stmt_as_slice(s: &Stmt) -> &[Stmt] {
+        match &s.kind {
+            StmtKind::Block(inner) => &inner.stmts,
+            _ => std::slice::from_ref(s),
+        }
+    }
+
+    /// `if (!cond) { break; }` at the top of a loop body.
+    fn break_unless(&mut self, b: &mut FnBuilder, cond: &ast::Expr) {
+        let sp = span(cond.span);
+        let Some(c) = self.value(b, cond) else { return };
+        let not = b.expr(
+            E::Unary {
+                op: UnaryOperator::LogicalNot,
+                expr: c,
+            },
+            sp,
+        );
+        b.open();
+        b.stmt(Statement::Break, sp);
+        let accept = b.close();
+        b.stmt(
+            Statement::If {
+                condition: not,
+                accept,
+                reject: Block::new(),
+            },
+            sp,
+        );
+    }
+
+    pub fn stmt(&mut self, b: &mut FnBuilder, s: &Stmt) {
+        let sp = span(s.span);
+        match &s.kind {
+            StmtKind::Block(inner) => {
+                let block = self.nested(b, &inner.stmts);
+                b.stmt(Statement::Block(block), sp);
+            }
+            StmtKind::VarDecl(decl) => {
+                for d in &decl.declarators {
+                    let Some(ty) = self.lw.declared(d.name.span) else {
+                        continue;
+                    };
+                    let init = match &d.init {
+                        Some(init) => match self.initial_value(b, init, &ty) {
+                            Some(v) => Some(v),
+                            None => continue,
+                        },
+                        None => None,
+                    };
+                    let Some(ptr) = self.declare_variable(b, &d.name, &ty) else {
+                        continue;
+                    };
+                    if let Some(v) = init {
+                        b.stmt(
+                            Statement::Store {
+                                pointer: ptr,
+                                value: v,
+                            },
+                            span(d.span),
+                        );
+                    }
+                }
+            }
+            StmtKind::Expr(e) => {
+                self.lower(b, e);
+            }
+            StmtKind::If {
+                branches,
+                otherwise,
+            } => self.if_chain(b, branches, otherwise.as_deref()),
+            StmtKind::For {
+                init,
+                cond,
+                step,
+                body,
+            } => {
+                b.open();
+                self.push_scope();
+                if let Some(i) = init {
+                    self.stmt(b, i);
+                }
+                b.open();
+                if let Some(c) = cond {
+                    self.break_unless(b, c);
+                }
+                self.block(b, Self::stmt_as_slice(body));
+                let body_block = b.close();
+                b.open();
+                for st in step {
+                    self.lower(b, st);
+                }
+                let continuing = b.close();
+                b.stmt(
+                    Statement::Loop {
+                        body: body_block,
+                        continuing,
+                        break_if: None,
+                    },
+                    sp,
+                );
+                self.pop_scope();
+                let outer = b.close();
+                b.stmt(Statement::Block(outer), sp);
+            }
+            StmtKind::While { cond, body } => {
+                b.open();
+                self.break_unless(b, cond);
+                self.block(b, Self::stmt_as_slice(body));
+                let body_block = b.close();
+                b.stmt(
+                    Statement::Loop {
+                        body: body_block,
+                        continuing: Block::new(),
+                        break_if: None,
+                    },
+                    sp,
+                );
+            }
+            StmtKind::DoWhile { body, cond } => {
+                let body_block = self.nested(b, Self::stmt_as_slice(body));
+                b.open();
+                let Some(c) = self.value(b, cond) else {
+                    b.close();
+                    return;
+                };
+                let not = b.expr(
+                    E::Unary {
+                        op: UnaryOperator::LogicalNot,
+                        expr: c,
+                    },
+                    span(cond.span),
+                );
+                let continuing = b.close();
+                b.stmt(
+                    Statement::Loop {
+                        body: body_block,
+                        continuing,
+                        break_if: Some(not),
+                    },
+                    sp,
+                );
+            }
+            StmtKind::Switch { selector, cases } => self.switch(b, s, selector, cases),
+            StmtKind::Break => b.stmt(Statement::Break, sp),
+            StmtKind::Continue => b.stmt(Statement::Continue, sp),
+            StmtKind::Return(value) => {
+                let ret = self.return_type().clone();
+                let v = match value {
+                    Some(e) => match self.initial_value(b, e, &ret) {
+                        Some(v) => Some(v),
+                        None => return,
+                    },
+                    None => None,
+                };
+                b.stmt(Statement::Return { value: v }, sp);
+            }
+            StmtKind::Discard | StmtKind::Empty => {}
+        }
+    }
+
+    /// `if … else if … else …`: each condition is evaluated in the `else` block of the one
+    /// before, so the chain nests in naga while staying flat (and iterative) here.
+    fn if_chain(
+        &mut self,
+        b: &mut FnBuilder,
+        branches: &[(ast::Expr, Stmt)],
+        otherwise: Option<&Stmt>,
+    ) {
+        let mut pending = Vec::new();
+        for (i, (cond, body)) in branches.iter().enumerate() {
+            if i > 0 {
+                b.open();
+            }
+            let Some(c) = self.value(b, cond) else { return };
+            let accept = self.nested(b, Self::stmt_as_slice(body));
+            pending.push((c, accept, span(cond.span)));
+        }
+        let mut reject = match otherwise {
+            Some(o) => self.nested(b, Self::stmt_as_slice(o)),
+            None => Block::new(),
+        };
+        while let Some((condition, accept, sp)) = pending.pop() {
+            b.stmt(
+                Statement::If {
+                    condition,
+                    accept,
+                    reject,
+                },
+                sp,
+            );
+            if pending.is_empty() {
+                break;
+            }
+            reject = b.close();
+        }
+    }
+
+    fn switch(
+        &mut self,
+        b: &mut FnBuilder,
+        s: &Stmt,
+        selector: &ast::Expr,
+        cases: &[ast::SwitchCase],
+    ) {
+        let sp = span(s.span);
+        let Some(sel) = self.value(b, selector) else {
+            return;
+        };
+        let unsigned = self.type_of(selector) == Some(gdshader::check::types::Type::UINT);
+        let mut out = Vec::new();
+        for (i, case) in cases.iter().enumerate() {
+            let value = match &case.value {
+                None => SwitchValue::Default,
+                Some(v) => {
+                    let Some(n) = case_value(v) else {
+                        self.lw.error(
+                            v.span,
+                            "gdsky cannot translate this `case` label yet (only literal values)",
+                        );
+                        return;
+                    };
+                    if unsigned {
+                        SwitchValue::U32(n as u32)
+                    } else {
+                        SwitchValue::I32(n as i32)
+                    }
+                }
+            };
+            if case.body.is_empty() && i + 1 < cases.len() {
+                out.push(SwitchCase {
+                    value,
+                    body: Block::new(),
+                    fall_through: true,
+                });
+                continue;
+            }
+            // The case's own statements, then those of the cases it falls into, up to the first
+            // that ends with `break`, `return` or `continue`.
+            let mut stmts: Vec<Stmt> = Vec::new();
+            for c in &cases[i..] {
+                stmts.extend(c.body.iter().cloned());
+                if c.body.last().is_some_and(|l| {
+                    matches!(
+                        l.kind,
+                        StmtKind::Break | StmtKind::Return(_) | StmtKind::Continue
+                    )
+                }) {
+                    break;
+                }
+            }
+            let body = self.nested(b, &stmts);
+            out.push(SwitchCase {
+                value,
+                body,
+                fall_through: false,
+            });
+        }
+        if !out.iter().any(|c| c.value == SwitchValue::Default) {
+            out.push(SwitchCase {
+                value: SwitchValue::Default,
+                body: Block::new(),
+                fall_through: false,
+            });
+        }
+        b.stmt(
+            Statement::Switch {
+                selector: sel,
+                cases: out,
+            },
+            sp,
+        );
+    }
+}
+
+/// A `case` label's value: an int literal, possibly negated.
+fn case_value(e: &ast::Expr) -> Option<i64> {
+    match &e.kind {
+        ast::ExprKind::IntLit(v) | ast::ExprKind::UIntLit(v) => Some(i64::from(*v)),
+        ast::ExprKind::Unary {
+            op: ast::UnaryOp::Neg,
+            operand,
+        } => case_value(operand).map(|v| -v),
+        _ => None,
+    }
+}

@@ -1,0 +1,828 @@
+//! Godot's sky wrapper: the built-ins uniform, the per-pixel built-ins, and the entry points.
+//!
+//! Godot runs `sky()` inside a generated fragment shader that computes EYEDIR for the pass,
+//! sets COLOR = 0, ALPHA = 1, FOG = 0, calls `sky()`, applies custom fog, multiplies by the
+//! luminance multiplier and forces alpha to 0 outside the sub-passes (reference §1.1–§1.3). This
+//! module builds the same thing in naga IR:
+//!
+//! * group 0, binding 0: [`SkyBuiltins`](crate::reflect) — camera basis, POSITION, TIME, screen
+//!   size, the camera's tan(fov/2), the pass, the luminance multiplier, the cube face, and
+//!   LIGHT0..3. Its layout is fixed, so a host can fill it without reading reflection.
+//! * private globals for the built-ins that exist only inside `sky()` (EYEDIR, SCREEN_UV,
+//!   SKY_COORDS, FRAGCOORD, COLOR, ALPHA, FOG), declared only when the shader uses them.
+//! * `vs_main` (a fullscreen triangle), and `fs_panorama`, `fs_camera`, `fs_cubemap`, which differ
+//!   only in how a pixel becomes EYEDIR.
+
+use crate::lower::{FnBuilder, Lowerer, Val, span};
+use gdshader::check::types::Type as GdType;
+use gdshader::parse::ast;
+use naga::{
+    AddressSpace, BinaryOperator as Bo, Binding, BuiltIn, EntryPoint, Expression as E,
+    FunctionArgument, FunctionResult, GlobalVariable, Handle, Literal, MathFunction as Mf,
+    MemoryDecorations, ResourceBinding, ShaderStage, Span, Statement, Type, TypeInner, VectorSize,
+};
+use std::collections::HashMap;
+use std::f64::consts::PI;
+
+/// Fields of the built-ins uniform, in order (member indices).
+pub const BUILTIN_FIELDS: [&str; 10] = [
+    "camera_basis",
+    "position",
+    "time",
+    "screen_size",
+    "tan_half_fov",
+    "render_pass",
+    "luminance_multiplier",
+    "cube_face",
+    "fog_enabled",
+    "lights",
+];
+/// Fields of one light, in order.
+pub const LIGHT_FIELDS: [&str; 5] = ["direction", "energy", "color", "size", "enabled"];
+
+const CAMERA_BASIS: u32 = 0;
+const POSITION: u32 = 1;
+const TIME: u32 = 2;
+const SCREEN_SIZE: u32 = 3;
+const TAN_HALF_FOV: u32 = 4;
+const PASS: u32 = 5;
+const LUMINANCE: u32 = 6;
+const CUBE_FACE: u32 = 7;
+const LIGHTS: u32 = 9;
+
+/// Values of the `render_pass` field.
+pub const PASS_FULL: u32 = 0;
+/// Half-resolution sub-pass.
+pub const PASS_HALF: u32 = 1;
+/// Quarter-resolution sub-pass.
+pub const PASS_QUARTER: u32 = 2;
+/// A cubemap (radiance) face.
+pub const PASS_CUBEMAP: u32 = 3;
+
+/// The per-pixel built-ins, which live in private globals.
+const PRIVATES: [(&str, &str); 7] = [
+    ("EYEDIR", "vec3"),
+    ("SCREEN_UV", "vec2"),
+    ("SKY_COORDS", "vec2"),
+    ("FRAGCOORD", "vec4"),
+    ("COLOR", "vec3"),
+    ("ALPHA", "float"),
+    ("FOG", "vec4"),
+];
+
+/// The wrapper's globals.
+#[derive(Default)]
+pub struct Builtins {
+    global: Option<Handle<GlobalVariable>>,
+    privates: HashMap<&'static str, Handle<GlobalVariable>>,
+}
+
+impl Builtins {
+    /// Declares the built-ins uniform and the private globals the shader uses.
+    pub(crate) fn declare(lw: &mut Lowerer<'_>) {
+        let f = GdType::FLOAT;
+        let (Some(f32t), Some(u32t), Some(v2), Some(v3), Some(m3)) = (
+            lw.ty(&f, ast::Span::default()),
+            lw.ty(&GdType::UINT, ast::Span::default()),
+            lw.ty(
+                &GdType::Vector(gdshader::check::types::Scalar::Float, 2),
+                ast::Span::default(),
+            ),
+            lw.ty(
+                &GdType::Vector(gdshader::check::types::Scalar::Float, 3),
+                ast::Span::default(),
+            ),
+            lw.ty(&GdType::Matrix(3), ast::Span::default()),
+        ) else {
+            return;
+        };
+        let light = lw.struct_type(
+            "SkyLight",
+            &[
+                ("direction".into(), v3),
+                ("energy".into(), f32t),
+                ("color".into(), v3),
+                ("size".into(), f32t),
+                ("enabled".into(), u32t),
+            ],
+            true,
+        );
+        let lights = lw.uniform_array(light, 4);
+        let fields = [m3, v3, f32t, v2, f32t, u32t, f32t, u32t, u32t, lights];
+        let members: Vec<(String, Handle<Type>)> = BUILTIN_FIELDS
+            .iter()
+            .map(|n| n.to_string())
+            .zip(fields)
+            .collect();
+        let ty = lw.struct_type("SkyBuiltins", &members, true);
+        let global = lw.module.global_variables.append(
+            GlobalVariable {
+                name: Some("sky_builtins".into()),
+                space: AddressSpace::Uniform,
+                binding: Some(ResourceBinding {
+                    group: 0,
+                    binding: 0,
+                }),
+                ty,
+                init: None,
+                memory_decorations: MemoryDecorations::empty(),
+            },
+            Span::UNDEFINED,
+        );
+        lw.builtins.global = Some(global);
+        for (name, ty_name) in PRIVATES {
+            if !lw.shader.builtins_used.contains(name) {
+                continue;
+            }
+            let Some(ty) = GdType::from_name(ty_name).and_then(|t| lw.ty(&t, ast::Span::default()))
+            else {
+                continue;
+            };
+            let g = lw.module.global_variables.append(
+                GlobalVariable {
+                    name: Some(name.into()),
+                    space: AddressSpace::Private,
+                    binding: None,
+                    ty,
+                    init: None,
+                    memory_decorations: MemoryDecorations::empty(),
+                },
+                Span::UNDEFINED,
+            );
+            lw.builtins.privates.insert(name, g);
+        }
+    }
+}
+
+fn load_field(
+    b: &mut FnBuilder,
+    global: Handle<GlobalVariable>,
+    path: &[u32],
+    sp: Span,
+) -> Handle<E> {
+    let mut h = b.expr(E::GlobalVariable(global), sp);
+    for &i in path {
+        h = b.expr(E::AccessIndex { base: h, index: i }, sp);
+    }
+    b.expr(E::Load { pointer: h }, sp)
+}
+
+fn eq_u32(b: &mut FnBuilder, v: Handle<E>, k: u32, sp: Span) -> Handle<E> {
+    let k = b.expr(E::Literal(Literal::U32(k)), sp);
+    b.expr(
+        E::Binary {
+            op: Bo::Equal,
+            left: v,
+            right: k,
+        },
+        sp,
+    )
+}
+
+/// Reads a built-in variable in a function body (`None` when gdsky cannot supply it).
+pub(crate) fn read_builtin(
+    lw: &mut Lowerer,
+    b: &mut FnBuilder,
+    name: &str,
+    _ty: &GdType,
+    at: ast::Span,
+) -> Option<Val> {
+    let sp = span(at);
+    if let Some(v) = gdshader::check::builtins::builtin_constant(name) {
+        return Some(Val::Value(b.expr(E::Literal(Literal::F32(v as f32)), sp)));
+    }
+    if let Some(g) = lw.builtins.privates.get(name) {
+        return Some(Val::Pointer(b.expr(E::GlobalVariable(*g), sp)));
+    }
+    let global = lw.builtins.global?;
+    let value = match name {
+        "TIME" => load_field(b, global, &[TIME], sp),
+        "POSITION" => load_field(b, global, &[POSITION], sp),
+        "AT_HALF_RES_PASS" | "AT_QUARTER_RES_PASS" | "AT_CUBEMAP_PASS" => {
+            let pass = load_field(b, global, &[PASS], sp);
+            let k = match name {
+                "AT_HALF_RES_PASS" => PASS_HALF,
+                "AT_QUARTER_RES_PASS" => PASS_QUARTER,
+                _ => PASS_CUBEMAP,
+            };
+            eq_u32(b, pass, k, sp)
+        }
+        _ => {
+            let rest = name.strip_prefix("LIGHT")?;
+            let (n, field) = rest.split_once('_')?;
+            let n: u32 = n.parse().ok()?;
+            let index = LIGHT_FIELDS
+                .iter()
+                .position(|f| f.eq_ignore_ascii_case(field))? as u32;
+            let v = load_field(b, global, &[LIGHTS, n, index], sp);
+            if field == "ENABLED" {
+                let zero = b.expr(E::Literal(Literal::U32(0)), sp);
+                b.expr(
+                    E::Binary {
+                        op: Bo::NotEqual,
+                        left: v,
+                        right: zero,
+                    },
+                    sp,
+                )
+            } else {
+                v
+            }
+        }
+    };
+    Some(Val::Value(value))
+}
+
+/// How a fragment entry point turns a pixel into EYEDIR.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub enum Projection {
+    /// Equirectangular: the inverse of SKY_COORDS.
+    Panorama,
+    /// Godot's camera: vertical FOV, rotated by the camera basis.
+    Camera,
+    /// One face of a cubemap, as Godot's radiance pass renders it.
+    Cubemap,
+}
+
+impl Projection {
+    /// Every projection, in entry-point order.
+    pub const ALL: [Projection; 3] = [
+        Projection::Panorama,
+        Projection::Camera,
+        Projection::Cubemap,
+    ];
+
+    /// The fragment entry point's name.
+    pub fn entry_point(self) -> &'static str {
+        match self {
+            Projection::Panorama => "fs_panorama",
+            Projection::Camera => "fs_camera",
+            Projection::Cubemap => "fs_cubemap",
+        }
+    }
+}
+
+/// Godot's cubemap face orientations (4.3–4.5): `Basis::looking_at(normal, up)` for the normals
+/// +X, −X, +Y, −Y, +Z, −Z with ups −Y, −Y, +Z, −Z, −Y, −Y. Columns are the basis x, y, z axes.
+pub fn cube_face_basis(face: usize) -> [[f32; 3]; 3] {
+    let (target, up): ([f32; 3], [f32; 3]) = match face {
+        0 => ([1.0, 0.0, 0.0], [0.0, -1.0, 0.0]),
+        1 => ([-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]),
+        2 => ([0.0, 1.0, 0.0], [0.0, 0.0, 1.0]),
+        3 => ([0.0, -1.0, 0.0], [0.0, 0.0, -1.0]),
+        4 => ([0.0, 0.0, 1.0], [0.0, -1.0, 0.0]),
+        _ => ([0.0, 0.0, -1.0], [0.0, -1.0, 0.0]),
+    };
+    let z = [-target[0], -target[1], -target[2]];
+    let cross = |a: [f32; 3], b: [f32; 3]| {
+        [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
+    };
+    let x = cross(up, z);
+    let y = cross(z, x);
+    [x, y, z]
+}
+
+/// Adds the vertex entry point and one fragment entry point per projection.
+pub(crate) fn entry_points(lw: &mut Lowerer) {
+    let Some(global) = lw.builtins.global else {
+        return;
+    };
+    vertex(lw);
+    for p in Projection::ALL {
+        fragment(lw, global, p);
+    }
+}
+
+fn vertex(lw: &mut Lowerer) {
+    let sp = Span::UNDEFINED;
+    let (Some(u32t), Some(v4)) = (
+        lw.ty(&GdType::UINT, ast::Span::default()),
+        lw.ty(
+            &GdType::Vector(gdshader::check::types::Scalar::Float, 4),
+            ast::Span::default(),
+        ),
+    ) else {
+        return;
+    };
+    let mut b = FnBuilder::new("vs_main");
+    b.function.arguments.push(FunctionArgument {
+        name: Some("vertex_index".into()),
+        ty: u32t,
+        binding: Some(Binding::BuiltIn(BuiltIn::VertexIndex)),
+    });
+    b.function.result = Some(FunctionResult {
+        ty: v4,
+        binding: Some(Binding::BuiltIn(BuiltIn::Position { invariant: false })),
+    });
+    // The triangle (-1,-1), (3,-1), (-1,3) covers the screen.
+    let vi = b.expr(E::FunctionArgument(0), sp);
+    let one_u = b.expr(E::Literal(Literal::U32(1)), sp);
+    let two_u = b.expr(E::Literal(Literal::U32(2)), sp);
+    let shifted = b.expr(
+        E::Binary {
+            op: Bo::ShiftLeft,
+            left: vi,
+            right: one_u,
+        },
+        sp,
+    );
+    let xu = b.expr(
+        E::Binary {
+            op: Bo::And,
+            left: shifted,
+            right: two_u,
+        },
+        sp,
+    );
+    let yu = b.expr(
+        E::Binary {
+            op: Bo::And,
+            left: vi,
+            right: two_u,
+        },
+        sp,
+    );
+    let xf = b.expr(
+        E::As {
+            expr: xu,
+            kind: naga::ScalarKind::Float,
+            convert: Some(4),
+        },
+        sp,
+    );
+    let yf = b.expr(
+        E::As {
+            expr: yu,
+            kind: naga::ScalarKind::Float,
+            convert: Some(4),
+        },
+        sp,
+    );
+    let two = b.expr(E::Literal(Literal::F32(2.0)), sp);
+    let one = b.expr(E::Literal(Literal::F32(1.0)), sp);
+    let zero = b.expr(E::Literal(Literal::F32(0.0)), sp);
+    let x2 = b.expr(
+        E::Binary {
+            op: Bo::Multiply,
+            left: xf,
+            right: two,
+        },
+        sp,
+    );
+    let y2 = b.expr(
+        E::Binary {
+            op: Bo::Multiply,
+            left: yf,
+            right: two,
+        },
+        sp,
+    );
+    let x = b.expr(
+        E::Binary {
+            op: Bo::Subtract,
+            left: x2,
+            right: one,
+        },
+        sp,
+    );
+    let y = b.expr(
+        E::Binary {
+            op: Bo::Subtract,
+            left: y2,
+            right: one,
+        },
+        sp,
+    );
+    let pos = b.expr(
+        E::Compose {
+            ty: v4,
+            components: vec![x, y, zero, one],
+        },
+        sp,
+    );
+    b.stmt(Statement::Return { value: Some(pos) }, sp);
+    let function = b.finish();
+    lw.module.entry_points.push(EntryPoint {
+        name: "vs_main".into(),
+        stage: ShaderStage::Vertex,
+        early_depth_test: None,
+        workgroup_size: [0; 3],
+        workgroup_size_overrides: None,
+        function,
+        mesh_info: None,
+        task_payload: None,
+        incoming_ray_payload: None,
+    });
+}
+
+fn fragment(lw: &mut Lowerer, global: Handle<GlobalVariable>, projection: Projection) {
+    let sp = Span::UNDEFINED;
+    let fl = |lw: &mut Lowerer, n: u8| {
+        lw.ty(
+            &GdType::vector_of(gdshader::check::types::Scalar::Float, n),
+            ast::Span::default(),
+        )
+    };
+    let (Some(v2t), Some(v3t), Some(v4t)) = (fl(lw, 2), fl(lw, 3), fl(lw, 4)) else {
+        return;
+    };
+    let mut b = FnBuilder::new(projection.entry_point());
+    b.function.arguments.push(FunctionArgument {
+        name: Some("frag_coord".into()),
+        ty: v4t,
+        binding: Some(Binding::BuiltIn(BuiltIn::Position { invariant: false })),
+    });
+    b.function.result = Some(FunctionResult {
+        ty: v4t,
+        binding: Some(Binding::Location {
+            location: 0,
+            interpolation: None,
+            sampling: None,
+            blend_src: None,
+            per_primitive: false,
+        }),
+    });
+    let f = |b: &mut FnBuilder, v: f64| b.expr(E::Literal(Literal::F32(v as f32)), sp);
+    let bin = |b: &mut FnBuilder, op, l, r| {
+        b.expr(
+            E::Binary {
+                op,
+                left: l,
+                right: r,
+            },
+            sp,
+        )
+    };
+    let math = |b: &mut FnBuilder, fun, args: &[Handle<E>]| {
+        b.expr(
+            E::Math {
+                fun,
+                arg: args[0],
+                arg1: args.get(1).copied(),
+                arg2: args.get(2).copied(),
+                arg3: None,
+            },
+            sp,
+        )
+    };
+    let frag_coord = b.expr(E::FunctionArgument(0), sp);
+    let xy = b.expr(
+        E::Swizzle {
+            size: VectorSize::Bi,
+            vector: frag_coord,
+            pattern: [
+                naga::SwizzleComponent::X,
+                naga::SwizzleComponent::Y,
+                naga::SwizzleComponent::X,
+                naga::SwizzleComponent::X,
+            ],
+        },
+        sp,
+    );
+    let screen = load_field(&mut b, global, &[SCREEN_SIZE], sp);
+    let uv = bin(&mut b, Bo::Divide, xy, screen);
+    let u = b.expr(E::AccessIndex { base: uv, index: 0 }, sp);
+    let v = b.expr(E::AccessIndex { base: uv, index: 1 }, sp);
+    let dir = match projection {
+        Projection::Panorama => {
+            // The inverse of SKY_COORDS: u = atan2(x, -z) / 2π, v = acos(y) / π.
+            let tau = f(&mut b, 2.0 * PI);
+            let pi = f(&mut b, PI);
+            let phi = bin(&mut b, Bo::Multiply, u, tau);
+            let theta = bin(&mut b, Bo::Multiply, v, pi);
+            let (st, ct) = (
+                math(&mut b, Mf::Sin, &[theta]),
+                math(&mut b, Mf::Cos, &[theta]),
+            );
+            let (sphi, cphi) = (math(&mut b, Mf::Sin, &[phi]), math(&mut b, Mf::Cos, &[phi]));
+            let x = bin(&mut b, Bo::Multiply, st, sphi);
+            let zc = bin(&mut b, Bo::Multiply, st, cphi);
+            let z = b.expr(
+                E::Unary {
+                    op: naga::UnaryOperator::Negate,
+                    expr: zc,
+                },
+                sp,
+            );
+            b.expr(
+                E::Compose {
+                    ty: v3t,
+                    components: vec![x, ct, z],
+                },
+                sp,
+            )
+        }
+        Projection::Camera | Projection::Cubemap => {
+            // Godot's camera ray: ((2u − 1)·t·aspect, (1 − 2v)·t, −1), rotated by the basis.
+            let (one, two) = (f(&mut b, 1.0), f(&mut b, 2.0));
+            let u2 = bin(&mut b, Bo::Multiply, u, two);
+            let nx = bin(&mut b, Bo::Subtract, u2, one);
+            let v2 = bin(&mut b, Bo::Multiply, v, two);
+            let ny = bin(&mut b, Bo::Subtract, one, v2);
+            let (basis, t) = if projection == Projection::Camera {
+                (
+                    load_field(&mut b, global, &[CAMERA_BASIS], sp),
+                    load_field(&mut b, global, &[TAN_HALF_FOV], sp),
+                )
+            } else {
+                (cube_basis(lw, &mut b, global, sp), f(&mut b, 1.0))
+            };
+            let sx = b.expr(
+                E::AccessIndex {
+                    base: screen,
+                    index: 0,
+                },
+                sp,
+            );
+            let sy = b.expr(
+                E::AccessIndex {
+                    base: screen,
+                    index: 1,
+                },
+                sp,
+            );
+            let aspect = bin(&mut b, Bo::Divide, sx, sy);
+            let nxt = bin(&mut b, Bo::Multiply, nx, t);
+            let x = bin(&mut b, Bo::Multiply, nxt, aspect);
+            let y = bin(&mut b, Bo::Multiply, ny, t);
+            let minus_one = f(&mut b, -1.0);
+            let ray = b.expr(
+                E::Compose {
+                    ty: v3t,
+                    components: vec![x, y, minus_one],
+                },
+                sp,
+            );
+            let world = bin(&mut b, Bo::Multiply, basis, ray);
+            math(&mut b, Mf::Normalize, &[world])
+        }
+    };
+    let set = |lw: &Lowerer, b: &mut FnBuilder, name: &str, value: Handle<E>| {
+        if let Some(g) = lw.builtins.privates.get(name) {
+            let p = b.expr(E::GlobalVariable(*g), sp);
+            b.stmt(Statement::Store { pointer: p, value }, sp);
+        }
+    };
+    set(lw, &mut b, "EYEDIR", dir);
+    set(lw, &mut b, "SCREEN_UV", uv);
+    set(lw, &mut b, "FRAGCOORD", frag_coord);
+    if lw.builtins.privates.contains_key("SKY_COORDS") {
+        // u = atan2(d.x, −d.z) / 2π wrapped to [0, 1); v = acos(d.y) / π.
+        let dx = b.expr(
+            E::AccessIndex {
+                base: dir,
+                index: 0,
+            },
+            sp,
+        );
+        let dy = b.expr(
+            E::AccessIndex {
+                base: dir,
+                index: 1,
+            },
+            sp,
+        );
+        let dz = b.expr(
+            E::AccessIndex {
+                base: dir,
+                index: 2,
+            },
+            sp,
+        );
+        let ndz = b.expr(
+            E::Unary {
+                op: naga::UnaryOperator::Negate,
+                expr: dz,
+            },
+            sp,
+        );
+        let a = math(&mut b, Mf::Atan2, &[dx, ndz]);
+        let tau = f(&mut b, 2.0 * PI);
+        let su = bin(&mut b, Bo::Divide, a, tau);
+        let su = math(&mut b, Mf::Fract, &[su]);
+        let ac = math(&mut b, Mf::Acos, &[dy]);
+        let pi = f(&mut b, PI);
+        let sv = bin(&mut b, Bo::Divide, ac, pi);
+        let coords = b.expr(
+            E::Compose {
+                ty: v2t,
+                components: vec![su, sv],
+            },
+            sp,
+        );
+        set(lw, &mut b, "SKY_COORDS", coords);
+    }
+    let zero3 = f(&mut b, 0.0);
+    let zero3 = b.expr(
+        E::Splat {
+            size: VectorSize::Tri,
+            value: zero3,
+        },
+        sp,
+    );
+    set(lw, &mut b, "COLOR", zero3);
+    let one = f(&mut b, 1.0);
+    set(lw, &mut b, "ALPHA", one);
+    let zero4 = f(&mut b, 0.0);
+    let zero4 = b.expr(
+        E::Splat {
+            size: VectorSize::Quad,
+            value: zero4,
+        },
+        sp,
+    );
+    set(lw, &mut b, "FOG", zero4);
+    if let Some(sky) = lw.sky_function {
+        b.stmt(
+            Statement::Call {
+                function: sky,
+                arguments: Vec::new(),
+                result: None,
+            },
+            sp,
+        );
+    }
+    let read = |lw: &Lowerer, b: &mut FnBuilder, name: &str| {
+        lw.builtins.privates.get(name).map(|g| {
+            let p = b.expr(E::GlobalVariable(*g), sp);
+            b.expr(E::Load { pointer: p }, sp)
+        })
+    };
+    let mut rgb = read(lw, &mut b, "COLOR").unwrap_or(zero3);
+    let alpha = read(lw, &mut b, "ALPHA").unwrap_or(one);
+    let pass = load_field(&mut b, global, &[PASS], sp);
+    let is_cubemap = eq_u32(&mut b, pass, PASS_CUBEMAP, sp);
+    if !lw.shader.render_modes.iter().any(|m| m == "disable_fog")
+        && let Some(fog) = read(lw, &mut b, "FOG")
+    {
+        // Godot: if (FOG.a > 0) rgb = mix(rgb, FOG.rgb, FOG.a), never in the cubemap pass.
+        let fa = b.expr(
+            E::AccessIndex {
+                base: fog,
+                index: 3,
+            },
+            sp,
+        );
+        let frgb = b.expr(
+            E::Swizzle {
+                size: VectorSize::Tri,
+                vector: fog,
+                pattern: [
+                    naga::SwizzleComponent::X,
+                    naga::SwizzleComponent::Y,
+                    naga::SwizzleComponent::Z,
+                    naga::SwizzleComponent::X,
+                ],
+            },
+            sp,
+        );
+        let mixed = math(&mut b, Mf::Mix, &[rgb, frgb, fa]);
+        let zero = f(&mut b, 0.0);
+        let has_fog = bin(&mut b, Bo::Greater, fa, zero);
+        let not_cube = b.expr(
+            E::Unary {
+                op: naga::UnaryOperator::LogicalNot,
+                expr: is_cubemap,
+            },
+            sp,
+        );
+        let apply = bin(&mut b, Bo::LogicalAnd, has_fog, not_cube);
+        rgb = b.expr(
+            E::Select {
+                condition: apply,
+                accept: mixed,
+                reject: rgb,
+            },
+            sp,
+        );
+    }
+    let lum = load_field(&mut b, global, &[LUMINANCE], sp);
+    let rgb = bin(&mut b, Bo::Multiply, rgb, lum);
+    // Alpha is kept only where Godot keeps it: the sub-passes and the cubemap.
+    let full = eq_u32(&mut b, pass, PASS_FULL, sp);
+    let zero = f(&mut b, 0.0);
+    let alpha = b.expr(
+        E::Select {
+            condition: full,
+            accept: zero,
+            reject: alpha,
+        },
+        sp,
+    );
+    let out = b.expr(
+        E::Compose {
+            ty: v4t,
+            components: vec![rgb, alpha],
+        },
+        sp,
+    );
+    b.stmt(Statement::Return { value: Some(out) }, sp);
+    let function = b.finish();
+    lw.module.entry_points.push(EntryPoint {
+        name: projection.entry_point().into(),
+        stage: ShaderStage::Fragment,
+        early_depth_test: None,
+        workgroup_size: [0; 3],
+        workgroup_size_overrides: None,
+        function,
+        mesh_info: None,
+        task_payload: None,
+        incoming_ray_payload: None,
+    });
+}
+
+/// The basis of the cube face selected by the `cube_face` field, from a constant table.
+fn cube_basis(
+    lw: &mut Lowerer,
+    b: &mut FnBuilder,
+    global: Handle<GlobalVariable>,
+    sp: Span,
+) -> Handle<E> {
+    let (Some(m3), Some(v3)) = (
+        lw.ty(&GdType::Matrix(3), ast::Span::default()),
+        lw.ty(
+            &GdType::Vector(gdshader::check::types::Scalar::Float, 3),
+            ast::Span::default(),
+        ),
+    ) else {
+        return b.expr(E::Literal(Literal::F32(0.0)), sp);
+    };
+    let table_ty = lw.module.types.insert(
+        Type {
+            name: None,
+            inner: TypeInner::Array {
+                base: m3,
+                size: naga::ArraySize::Constant(
+                    std::num::NonZeroU32::new(6).unwrap_or(std::num::NonZeroU32::MIN),
+                ),
+                stride: 48,
+            },
+        },
+        Span::UNDEFINED,
+    );
+    let ge = &mut lw.module.global_expressions;
+    let faces = (0..6)
+        .map(|face| {
+            let cols = cube_face_basis(face)
+                .iter()
+                .map(|c| {
+                    let comps = c
+                        .iter()
+                        .map(|&x| ge.append(E::Literal(Literal::F32(x)), sp))
+                        .collect();
+                    ge.append(
+                        E::Compose {
+                            ty: v3,
+                            components: comps,
+                        },
+                        sp,
+                    )
+                })
+                .collect();
+            ge.append(
+                E::Compose {
+                    ty: m3,
+                    components: cols,
+                },
+                sp,
+            )
+        })
+        .collect();
+    let init = ge.append(
+        E::Compose {
+            ty: table_ty,
+            components: faces,
+        },
+        sp,
+    );
+    let table = lw.module.constants.append(
+        naga::Constant {
+            name: Some("CUBE_FACES".into()),
+            ty: table_ty,
+            init,
+        },
+        sp,
+    );
+    let face = load_field(b, global, &[CUBE_FACE], sp);
+    let c = b.expr(E::Constant(table), sp);
+    let tmp = b.local(Some("cube_faces"), table_ty, sp);
+    b.stmt(
+        Statement::Store {
+            pointer: tmp,
+            value: c,
+        },
+        sp,
+    );
+    let p = b.expr(
+        E::Access {
+            base: tmp,
+            index: face,
+        },
+        sp,
+    );
+    b.expr(E::Load { pointer: p }, sp)
+}
