@@ -16,6 +16,7 @@
 //! code the wrapper injects carries no span and is reported as the wrapper's.
 
 mod lower;
+pub mod reflect;
 pub mod wrapper;
 
 pub use lower::{MATERIAL_GROUP, UniformSlot};
@@ -32,6 +33,8 @@ pub const UNSUPPORTED: &str = "E600";
 pub const INVALID_MODULE: &str = "E601";
 /// Diagnostic code for a back end that could not write the module.
 pub const BACKEND: &str = "E602";
+/// Diagnostic code for a `--set NAME=VALUE` that names no uniform or does not fit its type.
+pub const BAD_SET: &str = "E603";
 
 /// Something the lowering could not translate, at a span of the checked shader.
 #[derive(Clone, Debug)]
@@ -55,10 +58,46 @@ pub struct Lowered {
 /// Lowers and validates a checked shader. Errors come back as diagnostics located in the
 /// user's files.
 pub fn lower(front: &FrontendOutput) -> Result<Lowered, Vec<Diagnostic>> {
+    lower_with(front, &HashMap::new())
+}
+
+/// Like [`lower`], with uniforms baked into constants: `baked` maps a uniform's name to the text
+/// of its value (`1.5`, `24`, `true`, `0.1,0.2,0.3`), as `gdsky convert --set` takes it.
+pub fn lower_with(
+    front: &FrontendOutput,
+    baked: &HashMap<String, String>,
+) -> Result<Lowered, Vec<Diagnostic>> {
     let Some(shader) = front.shader.as_ref() else {
         return Err(front.diagnostics.clone());
     };
-    let mut lw = lower::Lowerer::new(shader);
+    let mut values = HashMap::new();
+    let mut errors = Vec::new();
+    for (name, text) in baked {
+        let Some(u) = shader.uniforms.iter().find(|u| &u.name == name) else {
+            let known: Vec<&str> = shader.uniforms.iter().map(|u| u.name.as_str()).collect();
+            errors.push(
+                Diagnostic::error(
+                    BAD_SET,
+                    format!("`--set {name}=…`: the shader has no uniform `{name}`"),
+                )
+                .with_note(format!("its uniforms are: {}", known.join(", "))),
+            );
+            continue;
+        };
+        match reflect::parse_value(&u.ty, text) {
+            Ok(v) => {
+                values.insert(name.clone(), v);
+            }
+            Err(why) => errors.push(
+                Diagnostic::error(BAD_SET, format!("`--set {name}={text}`: {why}"))
+                    .with_note(format!("`{name}` is a `{}`", u.type_name)),
+            ),
+        }
+    }
+    if !errors.is_empty() {
+        return Err(errors);
+    }
+    let mut lw = lower::Lowerer::new(shader, values);
     lw.items();
     if !lw.errors.is_empty() {
         return Err(lw

@@ -85,6 +85,8 @@ pub(crate) struct Lowerer<'a> {
     functions: HashMap<String, Vec<UserFn>>,
     pub sky_function: Option<Handle<Function>>,
     pub errors: Vec<LowerError>,
+    /// Uniforms baked into constants (`--set`), with their values.
+    baked: HashMap<String, ConstValue>,
 }
 
 pub(crate) fn span(s: ast::Span) -> Span {
@@ -93,7 +95,7 @@ pub(crate) fn span(s: ast::Span) -> Span {
 }
 
 impl<'a> Lowerer<'a> {
-    pub fn new(shader: &'a CheckedShader) -> Self {
+    pub fn new(shader: &'a CheckedShader, baked: HashMap<String, ConstValue>) -> Self {
         Lowerer {
             shader,
             module: Module::default(),
@@ -108,6 +110,7 @@ impl<'a> Lowerer<'a> {
             functions: HashMap::new(),
             sky_function: None,
             errors: Vec::new(),
+            baked,
         }
     }
 
@@ -278,6 +281,24 @@ impl<'a> Lowerer<'a> {
         let mut names = Vec::new();
         for u in shader.uniforms.iter().filter(|u| !u.global) {
             let at = self.uniform_span(&u.name);
+            if let Some(value) = self.baked.get(&u.name).cloned() {
+                // A baked uniform is a constant: the compiler folds it, and it leaves the block.
+                if let (Some(th), Some(init)) =
+                    (self.ty(&u.ty, at), self.const_expr(&u.ty, &value, at))
+                {
+                    let c = self.module.constants.append(
+                        Constant {
+                            name: Some(u.name.clone()),
+                            ty: th,
+                            init,
+                        },
+                        span(at),
+                    );
+                    self.constants
+                        .insert(u.name.clone(), GlobalConst::Module(c));
+                }
+                continue;
+            }
             let Some(h) = self.uniform_ty(&u.ty, at) else {
                 continue;
             };

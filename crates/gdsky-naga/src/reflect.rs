@@ -1,0 +1,156 @@
+//! Reflection: what a host needs to drive a converted shader, as JSON.
+//!
+//! The JSON names the entry points, the two bind groups (the fixed built-ins block and the
+//! material block) with every uniform's offset and size as naga's layouter placed them, the
+//! uniforms' defaults, hints, group paths and docs, the built-ins the shader uses, its render
+//! modes, the passes it needs, and when Godot would re-render it.
+
+use crate::wrapper::{BUILTIN_FIELDS, LIGHT_FIELDS, Projection};
+use crate::{Lowered, MATERIAL_GROUP};
+use gdshader::CheckedShader;
+use gdshader::check::consteval::ConstValue;
+use gdshader::check::types::{Scalar, Type};
+use serde_json::{Value, json};
+use std::collections::HashMap;
+
+/// Parses a `--set` value for a uniform of type `ty`: `1.5`, `24`, `true`, or comma-separated
+/// components for vectors (`0.1,0.2,0.3`).
+pub fn parse_value(ty: &Type, text: &str) -> Result<ConstValue, String> {
+    let scalar = |s: Scalar, t: &str| -> Result<ConstValue, String> {
+        let t = t.trim();
+        match s {
+            Scalar::Float => t
+                .parse::<f64>()
+                .map(ConstValue::Float)
+                .map_err(|_| format!("`{t}` is not a number")),
+            Scalar::Int => t
+                .parse::<i32>()
+                .map(|v| ConstValue::Int(i64::from(v)))
+                .map_err(|_| format!("`{t}` is not an int")),
+            Scalar::UInt => t
+                .trim_end_matches('u')
+                .parse::<u32>()
+                .map(|v| ConstValue::UInt(u64::from(v)))
+                .map_err(|_| format!("`{t}` is not a uint")),
+            Scalar::Bool => match t {
+                "true" => Ok(ConstValue::Bool(true)),
+                "false" => Ok(ConstValue::Bool(false)),
+                _ => Err(format!("`{t}` is not `true` or `false`")),
+            },
+        }
+    };
+    match ty {
+        Type::Scalar(s) => scalar(*s, text),
+        Type::Vector(s, n) => {
+            let parts: Vec<&str> = text.split(',').collect();
+            if parts.len() != usize::from(*n) {
+                return Err(format!(
+                    "expected {n} comma-separated components, got {}",
+                    parts.len()
+                ));
+            }
+            parts
+                .iter()
+                .map(|p| scalar(*s, p))
+                .collect::<Result<Vec<_>, _>>()
+                .map(ConstValue::Composite)
+        }
+        _ => Err("only scalar and vector uniforms can be set".into()),
+    }
+}
+
+fn value_json(v: &ConstValue) -> Value {
+    match v {
+        ConstValue::Bool(b) => json!(b),
+        ConstValue::Int(i) => json!(i),
+        ConstValue::UInt(u) => json!(u),
+        ConstValue::Float(f) => json!(f),
+        ConstValue::Composite(items) => Value::Array(items.iter().map(value_json).collect()),
+    }
+}
+
+/// The reflection of a converted shader. `baked` lists the uniforms `--set` turned into
+/// constants, with their values.
+pub fn reflection(
+    name: &str,
+    shader: &CheckedShader,
+    lowered: &Lowered,
+    baked: &HashMap<String, String>,
+) -> Value {
+    let structs = shader.struct_names();
+    let uniforms: Vec<Value> = shader
+        .uniforms
+        .iter()
+        .filter(|u| !baked.contains_key(&u.name))
+        .map(|u| {
+            let slot = lowered.uniforms.get(&u.name);
+            json!({
+                "name": u.name,
+                "type": u.ty.display(&structs).to_string(),
+                "offset": slot.map(|s| s.offset),
+                "size": slot.map(|s| s.size),
+                "default": u.default.as_ref().map(value_json),
+                "hints": u.hints.iter().map(|h| json!({ "name": h.name, "args": h.args })).collect::<Vec<_>>(),
+                "group": u.group.join("."),
+                "doc": u.doc,
+            })
+        })
+        .collect();
+    let used: Vec<&str> = shader.builtins_used.iter().copied().collect();
+    let uses = |prefix: &str| used.iter().any(|b| b.starts_with(prefix));
+    let mut passes = vec!["full", "cubemap"];
+    if shader.render_modes.iter().any(|m| m == "use_half_res_pass") {
+        passes.push("half");
+    }
+    if shader
+        .render_modes
+        .iter()
+        .any(|m| m == "use_quarter_res_pass")
+    {
+        passes.push("quarter");
+    }
+    // Godot's AUTOMATIC process mode (reference §2), for a radiance size of 256.
+    let process_mode = if uses("TIME") || uses("POSITION") {
+        "realtime"
+    } else if uses("LIGHT") || lowered.material_size > 0 {
+        "incremental"
+    } else {
+        "quality"
+    };
+    json!({
+        "shader": name,
+        "entry_points": {
+            "vertex": "vs_main",
+            "fragment": Projection::ALL.iter().map(|p| (format!("{p:?}").to_lowercase(), json!(p.entry_point()))).collect::<serde_json::Map<_, _>>(),
+        },
+        "bindings": {
+            "builtins": {
+                "group": 0,
+                "binding": 0,
+                "struct": "SkyBuiltins",
+                "fields": BUILTIN_FIELDS,
+                "light_fields": LIGHT_FIELDS,
+            },
+            "material": {
+                "group": MATERIAL_GROUP,
+                "binding": 0,
+                "struct": "Material",
+                "size": lowered.material_size,
+            },
+            "textures": [],
+            "samplers": [],
+        },
+        "uniforms": uniforms,
+        "baked": baked.iter().map(|(k, v)| (k.clone(), json!(v))).collect::<serde_json::Map<_, _>>(),
+        "builtins_used": used,
+        "render_modes": shader.render_modes,
+        "passes": passes,
+        "update": {
+            "on_time": uses("TIME"),
+            "on_position": uses("POSITION"),
+            "on_light": uses("LIGHT"),
+            "on_material": true,
+            "process_mode": process_mode,
+        },
+    })
+}

@@ -1,0 +1,105 @@
+//! `gdsky convert FILE [-o DIR] [--set NAME=VALUE]...`
+
+use clap::Args;
+use gdsky::frontend::diag::render_human;
+use std::collections::HashMap;
+use std::io::IsTerminal;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Args)]
+pub struct ConvertArgs {
+    /// The sky shader (`.gdshader`) to convert.
+    #[arg(value_name = "FILE")]
+    file: PathBuf,
+    /// Directory to write `<stem>.wgsl`, `<stem>.spv` and `<stem>.json` into (created if missing).
+    #[arg(short = 'o', long = "out-dir", value_name = "DIR", default_value = ".")]
+    out_dir: PathBuf,
+    /// Bake a uniform into the shader as a constant: `--set view_samples=16`,
+    /// `--set ground_color=0.1,0.1,0.1`. Baked uniforms leave the material block.
+    #[arg(long = "set", value_name = "NAME=VALUE")]
+    set: Vec<String>,
+}
+
+pub fn run(args: &ConvertArgs) -> ExitCode {
+    let color = std::io::stderr().is_terminal() && std::env::var_os("NO_COLOR").is_none();
+    let mut baked = HashMap::new();
+    for s in &args.set {
+        let Some((name, value)) = s.split_once('=') else {
+            eprintln!("error: `--set {s}`: expected NAME=VALUE");
+            return ExitCode::from(1);
+        };
+        baked.insert(name.trim().to_string(), value.trim().to_string());
+    }
+    let front = match gdsky::check_file(&args.file) {
+        Ok(f) => f,
+        Err(err) => {
+            eprintln!("error: cannot read {}: {err}", args.file.display());
+            return ExitCode::from(2);
+        }
+    };
+    eprint!("{}", render_human(&front.db, &front.diagnostics, color));
+    let Some(shader) = front.shader.as_ref() else {
+        return ExitCode::from(1);
+    };
+    let lowered = match gdsky_naga::lower_with(&front, &baked) {
+        Ok(l) => l,
+        Err(diags) => {
+            eprint!("{}", render_human(&front.db, &diags, color));
+            return ExitCode::from(1);
+        }
+    };
+    let stem = args
+        .file
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "shader".into());
+    let wgsl = match gdsky_naga::to_wgsl(&lowered) {
+        Ok(w) => w,
+        Err(err) => {
+            eprintln!(
+                "error[{}]: naga's WGSL writer failed: {err}",
+                gdsky_naga::BACKEND
+            );
+            return ExitCode::from(1);
+        }
+    };
+    let spirv = match gdsky_naga::to_spirv(&lowered) {
+        Ok(words) => words
+            .iter()
+            .flat_map(|w| w.to_le_bytes())
+            .collect::<Vec<u8>>(),
+        Err(err) => {
+            eprintln!(
+                "error[{}]: naga's SPIR-V writer failed: {err}",
+                gdsky_naga::BACKEND
+            );
+            return ExitCode::from(1);
+        }
+    };
+    let reflection = gdsky_naga::reflect::reflection(&stem, shader, &lowered, &baked);
+    let json = match serde_json::to_string_pretty(&reflection) {
+        Ok(j) => j + "\n",
+        Err(err) => {
+            eprintln!("error: cannot write the reflection: {err}");
+            return ExitCode::from(1);
+        }
+    };
+    if let Err(err) = std::fs::create_dir_all(&args.out_dir) {
+        eprintln!("error: cannot create {}: {err}", args.out_dir.display());
+        return ExitCode::from(2);
+    }
+    for (ext, bytes) in [
+        ("wgsl", wgsl.as_bytes()),
+        ("spv", spirv.as_slice()),
+        ("json", json.as_bytes()),
+    ] {
+        let path = args.out_dir.join(format!("{stem}.{ext}"));
+        if let Err(err) = super::write_atomically(&path, bytes) {
+            eprintln!("error: cannot write {}: {err}", path.display());
+            return ExitCode::from(2);
+        }
+        println!("wrote {} ({} bytes)", path.display(), bytes.len());
+    }
+    ExitCode::SUCCESS
+}
