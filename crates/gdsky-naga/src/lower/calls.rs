@@ -27,6 +27,56 @@ pub(super) fn builtin(
     // Functions with an `out` argument take the place, not its value.
     match name {
         "modf" | "frexp" => return out_struct_call(ctx, b, e, name, args),
+        "uaddCarry" | "usubBorrow" => {
+            // sum = x + y, carry = sum < x; diff = x - y, borrow = x < y (as 0u or 1u).
+            let (x, y) = (ctx.value(b, &args[0])?, ctx.value(b, &args[1])?);
+            let add = name == "uaddCarry";
+            let result = b.expr(
+                E::Binary {
+                    op: if add { Bo::Add } else { Bo::Subtract },
+                    left: x,
+                    right: y,
+                },
+                sp,
+            );
+            let flag = if add {
+                b.expr(
+                    E::Binary {
+                        op: Bo::Less,
+                        left: result,
+                        right: x,
+                    },
+                    sp,
+                )
+            } else {
+                b.expr(
+                    E::Binary {
+                        op: Bo::Less,
+                        left: x,
+                        right: y,
+                    },
+                    sp,
+                )
+            };
+            let flag = ctx.convert(
+                b,
+                flag,
+                &GdType::vector_of(GdScalar::Bool, types[0].components().unwrap_or(1)),
+                GdScalar::UInt,
+                e.span,
+            );
+            let Some(super::expr::Val::Pointer(ptr)) = ctx.lower(b, &args[2]) else {
+                return ctx.unsupported(e, &format!("`{name}` with this output argument"));
+            };
+            b.stmt(
+                Statement::Store {
+                    pointer: ptr,
+                    value: flag,
+                },
+                sp,
+            );
+            return Some(result);
+        }
         "ldexp" => {
             let x = ctx.value(b, &args[0])?;
             let ex = ctx.value(b, &args[1])?;
@@ -146,6 +196,47 @@ pub(super) fn builtin(
         "refract" => math(b, Mf::Refract, &v, sp),
         "faceforward" => math(b, Mf::FaceForward, &v, sp),
         "outerProduct" => math(b, Mf::Outer, &v, sp),
+        "matrixCompMult" => {
+            let (GdType::Matrix(n), Some(th)) = (&types[0], ctx.naga_type(&types[0], e.span))
+            else {
+                return None;
+            };
+            let columns = (0..*n)
+                .map(|c| {
+                    let (l, r) = (
+                        b.expr(
+                            E::AccessIndex {
+                                base: v[0],
+                                index: u32::from(c),
+                            },
+                            sp,
+                        ),
+                        b.expr(
+                            E::AccessIndex {
+                                base: v[1],
+                                index: u32::from(c),
+                            },
+                            sp,
+                        ),
+                    );
+                    b.expr(
+                        E::Binary {
+                            op: Bo::Multiply,
+                            left: l,
+                            right: r,
+                        },
+                        sp,
+                    )
+                })
+                .collect();
+            b.expr(
+                E::Compose {
+                    ty: th,
+                    components: columns,
+                },
+                sp,
+            )
+        }
         "fma" => math(b, Mf::Fma, &v, sp),
         "step" => {
             let (edge, x) = (splat(b, v[0], &types[0]), v[1]);

@@ -184,6 +184,11 @@ impl<'l, 'a> FnCtx<'l, 'a> {
         Some(ptr)
     }
 
+    /// The naga type of a shader type.
+    pub fn naga_type(&mut self, ty: &GdType, at: ast::Span) -> Option<Handle<naga::Type>> {
+        self.lw.ty(ty, at)
+    }
+
     pub fn type_of(&self, e: &Expr) -> Option<GdType> {
         self.lw
             .shader
@@ -1082,7 +1087,55 @@ impl<'l, 'a> FnCtx<'l, 'a> {
                     )
                 }
                 [(v, GdType::Matrix(m))] if m == n => *v,
-                [(_, GdType::Matrix(_))] => return self.unsupported(e, "resizing a matrix"),
+                [(v, GdType::Matrix(m))] => {
+                    // GLSL: keep the overlapping block, fill the rest from the identity.
+                    let (m, n) = (*m, *n);
+                    let col_ty = self.lw.ty(&GdType::Vector(GdScalar::Float, n), e.span)?;
+                    let (zero, one) = (
+                        b.expr(E::Literal(Literal::F32(0.0)), sp),
+                        b.expr(E::Literal(Literal::F32(1.0)), sp),
+                    );
+                    let columns = (0..n)
+                        .map(|c| {
+                            let src = (c < m).then(|| {
+                                b.expr(
+                                    E::AccessIndex {
+                                        base: *v,
+                                        index: u32::from(c),
+                                    },
+                                    sp,
+                                )
+                            });
+                            let comps = (0..n)
+                                .map(|r| match src {
+                                    Some(col) if r < m => b.expr(
+                                        E::AccessIndex {
+                                            base: col,
+                                            index: u32::from(r),
+                                        },
+                                        sp,
+                                    ),
+                                    _ if r == c => one,
+                                    _ => zero,
+                                })
+                                .collect();
+                            b.expr(
+                                E::Compose {
+                                    ty: col_ty,
+                                    components: comps,
+                                },
+                                sp,
+                            )
+                        })
+                        .collect();
+                    b.expr(
+                        E::Compose {
+                            ty: th,
+                            components: columns,
+                        },
+                        sp,
+                    )
+                }
                 _ => b.expr(
                     E::Compose {
                         ty: th,

@@ -389,6 +389,17 @@ impl<'a> Lowerer<'a> {
         self.constants.insert(d.name.name.clone(), lowered);
     }
 
+    /// The literal value of a folded scalar global constant.
+    pub fn constant_literal(&self, name: &str) -> Option<Literal> {
+        let GlobalConst::Module(c) = self.constants.get(name)? else {
+            return None;
+        };
+        match self.module.global_expressions[self.module.constants[*c].init] {
+            Expression::Literal(l) => Some(l),
+            _ => None,
+        }
+    }
+
     /// A constant value as a global const-expression.
     fn const_expr(
         &mut self,

@@ -71,13 +71,12 @@ impl FnCtx<'_, '_> {
                     let Some(ty) = self.lw.declared(d.name.span) else {
                         continue;
                     };
-                    let init = match &d.init {
-                        Some(init) => match self.initial_value(b, init, &ty) {
-                            Some(v) => Some(v),
-                            None => continue,
-                        },
-                        None => None,
-                    };
+                    // A failed initializer (already reported) still declares the name, so its
+                    // uses are not reported again.
+                    let init = d
+                        .init
+                        .as_ref()
+                        .and_then(|init| self.initial_value(b, init, &ty));
                     let Some(ptr) = self.declare_variable(b, &d.name, &ty) else {
                         continue;
                     };
@@ -243,7 +242,7 @@ impl FnCtx<'_, '_> {
             let value = match &case.value {
                 None => SwitchValue::Default,
                 Some(v) => {
-                    let Some(n) = case_value(v) else {
+                    let Some(n) = case_value(v).or_else(|| self.named_case_value(v)) else {
                         self.lw.error(
                             v.span,
                             "gdsky cannot translate this `case` label yet (only literal values)",
@@ -270,12 +269,7 @@ impl FnCtx<'_, '_> {
             let mut stmts: Vec<Stmt> = Vec::new();
             for c in &cases[i..] {
                 stmts.extend(c.body.iter().cloned());
-                if c.body.last().is_some_and(|l| {
-                    matches!(
-                        l.kind,
-                        StmtKind::Break | StmtKind::Return(_) | StmtKind::Continue
-                    )
-                }) {
+                if c.body.last().is_some_and(ends_with_jump) {
                     break;
                 }
             }
@@ -300,6 +294,30 @@ impl FnCtx<'_, '_> {
             },
             sp,
         );
+    }
+}
+
+impl FnCtx<'_, '_> {
+    /// A `case` label naming a global constant: its folded value.
+    fn named_case_value(&self, e: &ast::Expr) -> Option<i64> {
+        let ast::ExprKind::Ident(id) = &e.kind else {
+            return None;
+        };
+        let c = self.lw.constant_literal(&id.name)?;
+        match c {
+            naga::Literal::I32(v) => Some(i64::from(v)),
+            naga::Literal::U32(v) => Some(i64::from(v)),
+            _ => None,
+        }
+    }
+}
+
+/// True when control cannot fall out of the end of `s`.
+fn ends_with_jump(s: &Stmt) -> bool {
+    match &s.kind {
+        StmtKind::Break | StmtKind::Return(_) | StmtKind::Continue => true,
+        StmtKind::Block(b) => b.stmts.last().is_some_and(ends_with_jump),
+        _ => false,
     }
 }
 
