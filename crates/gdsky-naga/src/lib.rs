@@ -112,15 +112,21 @@ pub fn lower_with(
     let uniforms = lw.uniforms;
     let material_size = lw.material_size;
     let module = lw.module;
-    match validator().validate(&module) {
-        Ok(info) => Ok(Lowered {
-            module,
-            info,
-            uniforms,
-            material_size,
-        }),
-        Err(err) => Err(vec![validation_diagnostic(front, &err)]),
-    }
+    let info = validate(front, &module).map_err(|d| vec![d])?;
+    Ok(Lowered {
+        module,
+        info,
+        uniforms,
+        material_size,
+    })
+}
+
+/// Validates a module lowered from `front` with naga; an error comes back as a diagnostic at
+/// the shader's own lines (every expression's span points into the shader).
+pub fn validate(front: &FrontendOutput, module: &naga::Module) -> Result<ModuleInfo, Diagnostic> {
+    validator()
+        .validate(module)
+        .map_err(|err| validation_diagnostic(front, &err))
 }
 
 /// The validator gdsky uses: everything checked except uniformity of control flow, since GLSL
@@ -149,19 +155,22 @@ fn validation_diagnostic(
     )
     .with_note("this is a bug in gdsky's translation, not in the shader; please report it")
     .with_notes(chain);
-    let mut labelled = false;
-    for (span, label) in err.spans() {
-        if let Some(range) = span.to_range() {
-            let (file, range) = front.locate(ast::Span::new(range.start, range.end));
-            let primary = !labelled;
-            d.labels.push(gdshader::Label {
-                file,
-                range,
-                message: label.clone(),
-                primary,
-            });
-            labelled = true;
-        }
+    // naga lists spans from the outer context (the function) to the innermost culprit; the
+    // innermost is where the user should look.
+    let spans: Vec<_> = err
+        .spans()
+        .filter_map(|(span, label)| span.to_range().map(|r| (r, label.clone())))
+        .collect();
+    let labelled = !spans.is_empty();
+    let last = spans.len().saturating_sub(1);
+    for (i, (range, label)) in spans.into_iter().enumerate() {
+        let (file, range) = front.locate(ast::Span::new(range.start, range.end));
+        d.labels.push(gdshader::Label {
+            file,
+            range,
+            message: label,
+            primary: i == last,
+        });
     }
     if !labelled {
         d.notes.push(

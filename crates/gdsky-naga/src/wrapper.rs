@@ -25,7 +25,7 @@ use std::collections::HashMap;
 use std::f64::consts::PI;
 
 /// Fields of the built-ins uniform, in order (member indices).
-pub const BUILTIN_FIELDS: [&str; 10] = [
+pub const BUILTIN_FIELDS: [&str; 9] = [
     "camera_basis",
     "position",
     "time",
@@ -34,7 +34,6 @@ pub const BUILTIN_FIELDS: [&str; 10] = [
     "render_pass",
     "luminance_multiplier",
     "cube_face",
-    "fog_enabled",
     "lights",
 ];
 /// Fields of one light, in order.
@@ -48,7 +47,7 @@ const TAN_HALF_FOV: u32 = 4;
 const PASS: u32 = 5;
 const LUMINANCE: u32 = 6;
 const CUBE_FACE: u32 = 7;
-const LIGHTS: u32 = 9;
+const LIGHTS: u32 = 8;
 
 /// Values of the `render_pass` field.
 pub const PASS_FULL: u32 = 0;
@@ -108,7 +107,7 @@ impl Builtins {
             true,
         );
         let lights = lw.uniform_array(light, 4);
-        let fields = [m3, v3, f32t, v2, f32t, u32t, f32t, u32t, u32t, lights];
+        let fields = [m3, v3, f32t, v2, f32t, u32t, f32t, u32t, lights];
         let members: Vec<(String, Handle<Type>)> = BUILTIN_FIELDS
             .iter()
             .map(|n| n.to_string())

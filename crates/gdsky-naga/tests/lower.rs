@@ -144,3 +144,107 @@ fn every_valid_test_shader_converts() {
     );
     assert!(converted >= 20, "only {converted} shaders converted");
 }
+
+/// The built-ins block is an interface hosts fill by hand: its layout is pinned here, and in
+/// the README's binding-interface section.
+#[test]
+fn builtins_block_layout_is_fixed() {
+    let _ = std::env::set_current_dir(root());
+    let front = gdshader::check_file(Path::new("fixtures/freeman_sky.gdshader")).expect("readable");
+    let lowered = gdsky_naga::lower(&front).expect("lowers");
+    let module = &lowered.module;
+    let layout = |name: &str| {
+        let ty = module
+            .types
+            .iter()
+            .find(|(_, t)| t.name.as_deref() == Some(name))
+            .map(|(_, t)| t.inner.clone())
+            .expect("struct exists");
+        match ty {
+            naga::TypeInner::Struct { members, span } => (
+                members
+                    .iter()
+                    .map(|m| (m.name.clone().unwrap_or_default(), m.offset))
+                    .collect::<Vec<_>>(),
+                span,
+            ),
+            _ => panic!("{name} is not a struct"),
+        }
+    };
+    let (fields, size) = layout("SkyBuiltins");
+    let expect: Vec<(String, u32)> = [
+        ("camera_basis", 0),
+        ("position", 48),
+        ("time", 60),
+        ("screen_size", 64),
+        ("tan_half_fov", 72),
+        ("render_pass", 76),
+        ("luminance_multiplier", 80),
+        ("cube_face", 84),
+        ("lights", 96),
+    ]
+    .iter()
+    .map(|(n, o)| (n.to_string(), *o))
+    .collect();
+    assert_eq!(fields, expect);
+    assert_eq!(size, 288);
+    let (light, light_size) = layout("SkyLight");
+    let expect: Vec<(String, u32)> = [
+        ("direction", 0),
+        ("energy", 12),
+        ("color", 16),
+        ("size", 28),
+        ("enabled", 32),
+    ]
+    .iter()
+    .map(|(n, o)| (n.to_string(), *o))
+    .collect();
+    assert_eq!(light, expect);
+    assert_eq!(light_size, 48);
+}
+
+/// A module naga rejects is reported at the .gdshader line its bad code came from. (A valid
+/// shader never produces one unless gdsky has a bug, so the bug is planted: the function that
+/// returns `mie_scattering / mie_albedo` is told it returns an int.)
+#[test]
+fn a_validation_error_points_at_the_shader_line() {
+    let _ = std::env::set_current_dir(root());
+    let path = Path::new("fixtures/freeman_sky.gdshader");
+    let front = gdshader::check_file(path).expect("readable");
+    let mut module = gdsky_naga::lower(&front).expect("lowers").module;
+    let int = module.types.insert(
+        naga::Type {
+            name: None,
+            inner: naga::TypeInner::Scalar(naga::Scalar::I32),
+        },
+        naga::Span::UNDEFINED,
+    );
+    let (_, f) = module
+        .functions
+        .iter_mut()
+        .find(|(_, f)| f.name.as_deref() == Some("get_mie_extinction"))
+        .expect("function exists");
+    f.result = Some(naga::FunctionResult {
+        ty: int,
+        binding: None,
+    });
+    let diagnostic = gdsky_naga::validate(&front, &module).expect_err("the planted bug is caught");
+    assert_eq!(diagnostic.code, gdsky_naga::INVALID_MODULE);
+    let label = diagnostic
+        .primary_label()
+        .expect("the error has a place in the shader");
+    assert_eq!(front.db.name(label.file), "fixtures/freeman_sky.gdshader");
+    let (line, _) = front.db.line_col(label.file, label.range.start);
+    let text = std::fs::read_to_string(path).expect("readable");
+    let expected = text
+        .lines()
+        .position(|l| l.contains("return mie_scattering / mie_albedo;"))
+        .expect("the line exists")
+        + 1;
+    assert_eq!(
+        line,
+        expected,
+        "{}",
+        gdshader::diag::render_human(&front.db, std::slice::from_ref(&diagnostic), false)
+    );
+}

@@ -72,9 +72,9 @@ const MAX_INCLUDE_DEPTH: usize = 25;
 /// no such limits, but a real shader comes nowhere near them, and without them 25 levels of
 /// includes each naming new paths could read exponentially many files.)
 const MAX_INCLUDED_FILES: usize = 1024;
-const MAX_TOTAL_INPUT: usize = 16 << 20;
+const MAX_TOTAL_INPUT: usize = 4 << 20;
 /// The preprocessed text never grows past this many bytes...
-const OUTPUT_CAP: usize = 16 << 20;
+const OUTPUT_CAP: usize = 4 << 20;
 /// ...nor past this many times the input (but always allows [`OUTPUT_FLOOR`]).
 const OUTPUT_FACTOR: usize = 32;
 const OUTPUT_FLOOR: usize = 1 << 20;
@@ -83,7 +83,7 @@ const OUTPUT_FLOOR: usize = 1 << 20;
 /// some 30–100 ns.)
 const WORK_FLOOR: u64 = 2 << 20;
 const WORK_FACTOR: u64 = 8;
-const WORK_CAP: u64 = 32 << 20;
+const WORK_CAP: u64 = 8 << 20;
 /// The preprocessor stops reporting after this many diagnostics.
 const MAX_DIAGNOSTICS: usize = 200;
 
