@@ -128,6 +128,7 @@ fn every_valid_test_shader_converts() {
             (Ok(c), None) => {
                 converted += 1;
                 insta::assert_snapshot!(format!("{name}.wgsl"), c.wgsl);
+                insta::assert_json_snapshot!(format!("{name}.json"), c.reflection);
             }
             (Ok(_), Some(_)) => {
                 failures.push(format!("{name} now converts: remove it from NOT_YET"))
