@@ -18,5 +18,7 @@
 //! assert_eq!(output.db.line_col(label.file, label.range.start), (2, 24));
 //! ```
 
+pub mod build;
+
 pub use gdshader as frontend;
 pub use gdshader::{CheckedShader, Diagnostic, FrontendOutput, Severity, check_file, check_source};

@@ -1,0 +1,5 @@
+fn main() {
+    if let Err(err) = gdsky::build::compile("../../fixtures/freeman_sky.gdshader") {
+        panic!("{err}");
+    }
+}

@@ -1,0 +1,66 @@
+//! A crate that compiles the Freeman sky at build time (see `build.rs`) and exposes what a
+//! renderer needs: the WGSL, the SPIR-V words and the material struct.
+
+include!(concat!(env!("OUT_DIR"), "/freeman_sky.rs"));
+
+/// The converted shader, WGSL.
+pub const FREEMAN_SKY_WGSL: &str = include_str!(concat!(env!("OUT_DIR"), "/freeman_sky.wgsl"));
+
+/// The converted shader, SPIR-V bytes (little-endian words).
+pub const FREEMAN_SKY_SPIRV: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/freeman_sky.spv"));
+
+/// The reflection JSON.
+pub const FREEMAN_SKY_REFLECTION: &str =
+    include_str!(concat!(env!("OUT_DIR"), "/freeman_sky.json"));
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn reflection() -> serde_json::Value {
+        serde_json::from_str(FREEMAN_SKY_REFLECTION).expect("valid JSON")
+    }
+
+    #[test]
+    fn struct_layout_matches_the_reflection() {
+        let json = reflection();
+        assert_eq!(
+            Some(std::mem::size_of::<FreemanSkyMaterial>() as u64),
+            json["bindings"]["material"]["size"].as_u64()
+        );
+        let uniforms = json["uniforms"].as_array().expect("uniforms");
+        assert_eq!(FreemanSkyMaterial::FIELDS.len(), uniforms.len());
+        for (name, offset) in FreemanSkyMaterial::FIELDS {
+            let u = uniforms
+                .iter()
+                .find(|u| u["name"] == *name)
+                .expect("the field is a uniform");
+            assert_eq!(Some(*offset as u64), u["offset"].as_u64(), "{name}");
+        }
+    }
+
+    #[test]
+    fn default_is_the_shaders_defaults() {
+        let m = FreemanSkyMaterial::default();
+        assert_eq!(m.sun_intensity, 62.832);
+        assert_eq!(m.sun_wavelengths, [0.68, 0.55, 0.48]);
+        assert_eq!(m.view_samples, 24);
+        assert_eq!(m.sun_samples, 8);
+        let bytes: &[u8] = bytemuck::bytes_of(&m);
+        let offset = FreemanSkyMaterial::FIELDS
+            .iter()
+            .find(|(n, _)| *n == "planet_radius")
+            .map(|f| f.1)
+            .expect("field");
+        assert_eq!(
+            f32::from_le_bytes(bytes[offset..offset + 4].try_into().expect("4 bytes")),
+            6_360_000.0
+        );
+    }
+
+    #[test]
+    fn outputs_are_real_shaders() {
+        assert!(FREEMAN_SKY_WGSL.contains("@fragment"));
+        assert_eq!(&FREEMAN_SKY_SPIRV[..4], &0x0723_0203u32.to_le_bytes());
+    }
+}
