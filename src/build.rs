@@ -1,10 +1,8 @@
 //! Compiling `.gdshader` files from a build script.
 //!
 //! ```no_run
-//! // build.rs
-//! fn main() {
-//!     gdsky::build::compile("shaders/freeman_sky.gdshader").expect("sky shader compiles");
-//! }
+//! // In build.rs, inside `fn main()`:
+//! gdsky::build::compile("shaders/freeman_sky.gdshader").expect("sky shader compiles");
 //! ```
 //!
 //! [`compile`] writes `<stem>.wgsl`, `<stem>.spv`, `<stem>.json` and `<stem>.rs` into `OUT_DIR`,
