@@ -19,7 +19,7 @@ mod lower;
 pub mod reflect;
 pub mod wrapper;
 
-pub use lower::{MATERIAL_GROUP, UniformSlot};
+pub use lower::{MATERIAL_GROUP, TextureSlot, UniformSlot};
 pub use wrapper::Projection;
 
 use gdshader::parse::ast;
@@ -53,6 +53,8 @@ pub struct Lowered {
     pub uniforms: HashMap<String, UniformSlot>,
     /// Size in bytes of the material block (0 when the shader has no uniforms).
     pub material_size: u32,
+    /// Sampler uniforms: a texture and a sampler each in group [`MATERIAL_GROUP`].
+    pub textures: HashMap<String, TextureSlot>,
 }
 
 /// Lowers and validates a checked shader. Errors come back as diagnostics located in the
@@ -111,6 +113,7 @@ pub fn lower_with(
     }
     let uniforms = lw.uniforms;
     let material_size = lw.material_size;
+    let textures = lw.textures;
     let module = lw.module;
     let info = validate(front, &module).map_err(|d| vec![d])?;
     Ok(Lowered {
@@ -118,6 +121,7 @@ pub fn lower_with(
         info,
         uniforms,
         material_size,
+        textures,
     })
 }
 

@@ -81,7 +81,7 @@ pub fn reflection(
     let uniforms: Vec<Value> = shader
         .uniforms
         .iter()
-        .filter(|u| !baked.contains_key(&u.name))
+        .filter(|u| !baked.contains_key(&u.name) && !lowered.textures.contains_key(&u.name))
         .map(|u| {
             let slot = lowered.uniforms.get(&u.name);
             json!({
@@ -96,6 +96,36 @@ pub fn reflection(
             })
         })
         .collect();
+    let mut textures: Vec<(u32, Value, Value)> = shader
+        .uniforms
+        .iter()
+        .filter_map(|u| {
+            let slot = lowered.textures.get(&u.name)?;
+            let hint = |prefix: &str| u.hints.iter().find(|h| h.name.starts_with(prefix)).map(|h| h.name.clone());
+            let texture = json!({
+                "name": u.name,
+                "group": MATERIAL_GROUP,
+                "binding": slot.binding,
+                "type": u.ty.display(&structs).to_string(),
+                "srgb": u.hints.iter().any(|h| h.name == "source_color"),
+                "default": hint("hint_default_").map(|h| h.trim_start_matches("hint_default_").to_string()),
+                "hints": u.hints.iter().map(|h| h.name.clone()).collect::<Vec<_>>(),
+                "doc": u.doc,
+            });
+            // Godot's default for sky shaders: linear filtering with mipmaps, repeat on.
+            let filter = hint("filter_").unwrap_or_else(|| "filter_linear_mipmap".into());
+            let sampler = json!({
+                "name": format!("{}_sampler", u.name),
+                "texture": u.name,
+                "group": MATERIAL_GROUP,
+                "binding": slot.binding + 1,
+                "filter": filter.trim_start_matches("filter_"),
+                "repeat": hint("repeat_").is_none_or(|r| r == "repeat_enable"),
+            });
+            Some((slot.binding, texture, sampler))
+        })
+        .collect();
+    textures.sort_by_key(|t| t.0);
     let used: Vec<&str> = shader.builtins_used.iter().copied().collect();
     let uses = |prefix: &str| used.iter().any(|b| b.starts_with(prefix));
     let mut passes = vec!["full", "cubemap"];
@@ -137,8 +167,8 @@ pub fn reflection(
                 "struct": "Material",
                 "size": lowered.material_size,
             },
-            "textures": [],
-            "samplers": [],
+            "textures": textures.iter().map(|t| t.1.clone()).collect::<Vec<_>>(),
+            "samplers": textures.iter().map(|t| t.2.clone()).collect::<Vec<_>>(),
         },
         "uniforms": uniforms,
         "baked": baked.iter().map(|(k, v)| (k.clone(), json!(v))).collect::<serde_json::Map<_, _>>(),

@@ -35,7 +35,7 @@ const NOT_YET: &[(&str, &str)] = &[
         "uniform_groups_global_arrays.gdshader",
         "global uniforms, uniform float arrays",
     ),
-    ("uniform_hints_sampler.gdshader", "sampler uniforms"),
+    ("uniform_hints_sampler.gdshader", "arrays of samplers"),
 ];
 
 struct Converted {

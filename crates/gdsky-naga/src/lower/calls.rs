@@ -24,6 +24,9 @@ pub(super) fn builtin(
 ) -> Option<H> {
     let sp = span(e.span);
     let name = callee.name.as_str();
+    if name.starts_with("texture") || name == "texelFetch" {
+        return texture_call(ctx, b, e, name, args, types);
+    }
     // Functions with an `out` argument take the place, not its value.
     match name {
         "modf" | "frexp" => return out_struct_call(ctx, b, e, name, args),
@@ -575,4 +578,295 @@ fn out_struct_call(
         sp,
     );
     Some(first)
+}
+
+/// Texture functions on a sampler uniform: `texture`, `textureLod`, `textureGrad`,
+/// `textureProj`, `textureProjLod`, `textureGather`, `texelFetch`, `textureSize`,
+/// `textureQueryLevels`.
+fn texture_call(
+    ctx: &mut FnCtx,
+    b: &mut FnBuilder,
+    e: &Expr,
+    name: &str,
+    args: &[Expr],
+    types: &[GdType],
+) -> Option<H> {
+    use gdshader::check::types::SamplerKind as K;
+    let sp = span(e.span);
+    let slot = match &args[0].kind {
+        ast::ExprKind::Ident(id) => ctx.lw.textures.get(&id.name).cloned(),
+        _ => None,
+    };
+    let Some(slot) = slot else {
+        return ctx.unsupported(
+            e,
+            &format!("`{name}` on this sampler (only sampler uniforms are translated)"),
+        );
+    };
+    let image = b.expr(E::GlobalVariable(slot.image), sp);
+    let sampler = b.expr(E::GlobalVariable(slot.sampler), sp);
+    let rest: Vec<H> = args[1..]
+        .iter()
+        .map(|a| ctx.value(b, a))
+        .collect::<Option<_>>()?;
+    let arrayed = matches!(slot.kind, K::Tex2DArray | K::CubeArray);
+    // GLSL puts an array layer in the last coordinate; naga takes it apart.
+    let split = |b: &mut FnBuilder, coord: H, n: u8| -> (H, Option<H>) {
+        if !arrayed {
+            return (coord, None);
+        }
+        let pattern = [
+            naga::SwizzleComponent::X,
+            naga::SwizzleComponent::Y,
+            naga::SwizzleComponent::Z,
+            naga::SwizzleComponent::X,
+        ];
+        let xy = b.expr(
+            E::Swizzle {
+                size: vector_size(n - 1),
+                vector: coord,
+                pattern,
+            },
+            sp,
+        );
+        let layer = b.expr(
+            E::AccessIndex {
+                base: coord,
+                index: u32::from(n - 1),
+            },
+            sp,
+        );
+        (xy, Some(layer))
+    };
+    let coord_width = types.get(1).and_then(GdType::components).unwrap_or(2);
+    let sample = |b: &mut FnBuilder,
+                  coord: H,
+                  level: naga::SampleLevel,
+                  gather: Option<naga::SwizzleComponent>| {
+        let (coordinate, layer) = split(b, coord, coord_width);
+        let array_index = layer.map(|l| {
+            let r = math(b, Mf::Round, &[l], sp);
+            b.expr(
+                E::As {
+                    expr: r,
+                    kind: ScalarKind::Sint,
+                    convert: Some(4),
+                },
+                sp,
+            )
+        });
+        b.expr(
+            E::ImageSample {
+                image,
+                sampler,
+                gather,
+                coordinate,
+                array_index,
+                offset: None,
+                level,
+                depth_ref: None,
+                clamp_to_edge: false,
+            },
+            sp,
+        )
+    };
+    let float_only = |ctx: &mut FnCtx| -> Option<()> {
+        if slot.scalar == GdScalar::Float {
+            Some(())
+        } else {
+            ctx.unsupported(
+                e,
+                &format!("`{name}` on an integer sampler (WGSL samples only float textures)"),
+            )
+        }
+    };
+    let projected = |b: &mut FnBuilder, p: H, width: u8| {
+        // textureProj divides the coordinate by its last component.
+        let last = b.expr(
+            E::AccessIndex {
+                base: p,
+                index: u32::from(width - 1),
+            },
+            sp,
+        );
+        let n = if matches!(slot.kind, K::Tex3D) { 3 } else { 2 };
+        let pattern = [
+            naga::SwizzleComponent::X,
+            naga::SwizzleComponent::Y,
+            naga::SwizzleComponent::Z,
+            naga::SwizzleComponent::X,
+        ];
+        let head = b.expr(
+            E::Swizzle {
+                size: vector_size(n),
+                vector: p,
+                pattern,
+            },
+            sp,
+        );
+        let last = b.expr(
+            E::Splat {
+                size: vector_size(n),
+                value: last,
+            },
+            sp,
+        );
+        b.expr(
+            E::Binary {
+                op: Bo::Divide,
+                left: head,
+                right: last,
+            },
+            sp,
+        )
+    };
+    let h = match name {
+        "texture" => {
+            float_only(ctx)?;
+            let level = rest.get(1).map_or(naga::SampleLevel::Auto, |bias| {
+                naga::SampleLevel::Bias(*bias)
+            });
+            sample(b, rest[0], level, None)
+        }
+        "textureLod" => {
+            float_only(ctx)?;
+            sample(b, rest[0], naga::SampleLevel::Exact(rest[1]), None)
+        }
+        "textureGrad" => {
+            float_only(ctx)?;
+            sample(
+                b,
+                rest[0],
+                naga::SampleLevel::Gradient {
+                    x: rest[1],
+                    y: rest[2],
+                },
+                None,
+            )
+        }
+        "textureProj" | "textureProjLod" => {
+            float_only(ctx)?;
+            let coord = projected(b, rest[0], coord_width);
+            let level = match (name, rest.get(1)) {
+                ("textureProjLod", Some(l)) => naga::SampleLevel::Exact(*l),
+                (_, Some(bias)) => naga::SampleLevel::Bias(*bias),
+                _ => naga::SampleLevel::Auto,
+            };
+            b.expr(
+                E::ImageSample {
+                    image,
+                    sampler,
+                    gather: None,
+                    coordinate: coord,
+                    array_index: None,
+                    offset: None,
+                    level,
+                    depth_ref: None,
+                    clamp_to_edge: false,
+                },
+                sp,
+            )
+        }
+        "textureGather" => {
+            float_only(ctx)?;
+            let component = match args.get(2).map(|a| &a.kind) {
+                None => naga::SwizzleComponent::X,
+                Some(ast::ExprKind::IntLit(c)) => [
+                    naga::SwizzleComponent::X,
+                    naga::SwizzleComponent::Y,
+                    naga::SwizzleComponent::Z,
+                    naga::SwizzleComponent::W,
+                ][(*c as usize).min(3)],
+                Some(_) => {
+                    return ctx
+                        .unsupported(e, "`textureGather` with a component that is not a literal");
+                }
+            };
+            sample(b, rest[0], naga::SampleLevel::Zero, Some(component))
+        }
+        "texelFetch" => {
+            let (coordinate, array_index) = split(b, rest[0], coord_width);
+            b.expr(
+                E::ImageLoad {
+                    image,
+                    coordinate,
+                    array_index,
+                    sample: None,
+                    level: Some(rest[1]),
+                },
+                sp,
+            )
+        }
+        "textureSize" => {
+            let size = b.expr(
+                E::ImageQuery {
+                    image,
+                    query: naga::ImageQuery::Size {
+                        level: Some(rest[0]),
+                    },
+                },
+                sp,
+            );
+            let size = if arrayed {
+                let layers = b.expr(
+                    E::ImageQuery {
+                        image,
+                        query: naga::ImageQuery::NumLayers,
+                    },
+                    sp,
+                );
+                let ret = ctx.naga_type(&GdType::Vector(GdScalar::UInt, 3), e.span)?;
+                let x = b.expr(
+                    E::AccessIndex {
+                        base: size,
+                        index: 0,
+                    },
+                    sp,
+                );
+                let y = b.expr(
+                    E::AccessIndex {
+                        base: size,
+                        index: 1,
+                    },
+                    sp,
+                );
+                b.expr(
+                    E::Compose {
+                        ty: ret,
+                        components: vec![x, y, layers],
+                    },
+                    sp,
+                )
+            } else {
+                size
+            };
+            b.expr(
+                E::As {
+                    expr: size,
+                    kind: ScalarKind::Sint,
+                    convert: Some(4),
+                },
+                sp,
+            )
+        }
+        "textureQueryLevels" => {
+            let levels = b.expr(
+                E::ImageQuery {
+                    image,
+                    query: naga::ImageQuery::NumLevels,
+                },
+                sp,
+            );
+            b.expr(
+                E::As {
+                    expr: levels,
+                    kind: ScalarKind::Sint,
+                    convert: Some(4),
+                },
+                sp,
+            )
+        }
+        _ => return ctx.unsupported(e, &format!("the built-in function `{name}`")),
+    };
+    Some(h)
 }

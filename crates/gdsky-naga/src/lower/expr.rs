@@ -457,6 +457,12 @@ impl<'l, 'a> FnCtx<'l, 'a> {
                 GlobalConst::Inline(init) => self.lower(b, &init),
             };
         }
+        if self.lw.textures.contains_key(&id.name) {
+            return self.unsupported(
+                e,
+                "a sampler used other than as the first argument of a texture function",
+            );
+        }
         if let Some(slot) = self.lw.uniforms.get(&id.name).cloned() {
             let material = self.lw.material?;
             let g = b.expr(E::GlobalVariable(material), sp);

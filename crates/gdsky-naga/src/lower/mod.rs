@@ -52,6 +52,21 @@ pub struct UniformSlot {
     pub size: u32,
 }
 
+/// A sampler uniform as a texture and a sampler in the material group.
+#[derive(Clone, Debug)]
+pub struct TextureSlot {
+    /// The texture global.
+    pub image: Handle<GlobalVariable>,
+    /// The sampler global.
+    pub sampler: Handle<GlobalVariable>,
+    /// Binding of the texture (the sampler is the next one).
+    pub binding: u32,
+    /// 2D, 2D array, 3D, cube, cube array.
+    pub kind: gdshader::check::types::SamplerKind,
+    /// What the texture holds.
+    pub scalar: GdScalar,
+}
+
 /// A global `const`.
 #[derive(Clone)]
 enum GlobalConst {
@@ -80,6 +95,8 @@ pub(crate) struct Lowerer<'a> {
     pub uniforms: HashMap<String, UniformSlot>,
     /// Size in bytes of the material block (0 when there is none).
     pub material_size: u32,
+    /// Sampler uniforms: a texture and a sampler each, after the material block.
+    pub textures: HashMap<String, TextureSlot>,
     pub builtins: Builtins,
     constants: HashMap<String, GlobalConst>,
     functions: HashMap<String, Vec<UserFn>>,
@@ -105,6 +122,7 @@ impl<'a> Lowerer<'a> {
             material: None,
             uniforms: HashMap::new(),
             material_size: 0,
+            textures: HashMap::new(),
             builtins: Builtins::default(),
             constants: HashMap::new(),
             functions: HashMap::new(),
@@ -299,6 +317,10 @@ impl<'a> Lowerer<'a> {
                 }
                 continue;
             }
+            if let GdType::Sampler(kind, scalar) = u.ty {
+                self.texture(&u.name, kind, scalar);
+                continue;
+            }
             let Some(h) = self.uniform_ty(&u.ty, at) else {
                 continue;
             };
@@ -348,6 +370,74 @@ impl<'a> Lowerer<'a> {
             Span::UNDEFINED,
         );
         self.material = Some(global);
+    }
+
+    /// Declares the texture and sampler of a sampler uniform: bindings 1 + 2k and 2 + 2k of the
+    /// material group, k counting sampler uniforms in declaration order.
+    fn texture(&mut self, name: &str, kind: gdshader::check::types::SamplerKind, scalar: GdScalar) {
+        use gdshader::check::types::SamplerKind as K;
+        let (dim, arrayed) = match kind {
+            K::Tex2D => (naga::ImageDimension::D2, false),
+            K::Tex2DArray => (naga::ImageDimension::D2, true),
+            K::Tex3D => (naga::ImageDimension::D3, false),
+            K::Cube => (naga::ImageDimension::Cube, false),
+            K::CubeArray => (naga::ImageDimension::Cube, true),
+        };
+        let image_ty = self.module.types.insert(
+            Type {
+                name: None,
+                inner: TypeInner::Image {
+                    dim,
+                    arrayed,
+                    class: naga::ImageClass::Sampled {
+                        kind: self::scalar(scalar).kind,
+                        multi: false,
+                    },
+                },
+            },
+            Span::UNDEFINED,
+        );
+        let sampler_ty = self.module.types.insert(
+            Type {
+                name: None,
+                inner: TypeInner::Sampler { comparison: false },
+            },
+            Span::UNDEFINED,
+        );
+        let binding = 1 + 2 * self.textures.len() as u32;
+        let global = |m: &mut Module, n: String, ty, b| {
+            m.global_variables.append(
+                GlobalVariable {
+                    name: Some(n),
+                    space: AddressSpace::Handle,
+                    binding: Some(ResourceBinding {
+                        group: MATERIAL_GROUP,
+                        binding: b,
+                    }),
+                    ty,
+                    init: None,
+                    memory_decorations: MemoryDecorations::empty(),
+                },
+                Span::UNDEFINED,
+            )
+        };
+        let image = global(&mut self.module, name.to_string(), image_ty, binding);
+        let sampler = global(
+            &mut self.module,
+            format!("{name}_sampler"),
+            sampler_ty,
+            binding + 1,
+        );
+        self.textures.insert(
+            name.to_string(),
+            TextureSlot {
+                image,
+                sampler,
+                binding,
+                kind,
+                scalar,
+            },
+        );
     }
 
     fn uniform_span(&self, name: &str) -> ast::Span {
