@@ -167,6 +167,17 @@ pub fn reflection(
                 "struct": "Material",
                 "size": lowered.material_size,
             },
+            "sky_textures": crate::wrapper::SKY_TEXTURES
+                .iter()
+                .filter(|(_, name, _, _)| lowered.textures.contains_key(*name))
+                .map(|(builtin, name, _, binding)| json!({
+                    "builtin": builtin,
+                    "texture": name,
+                    "group": crate::wrapper::SKY_TEXTURE_GROUP,
+                    "binding": binding,
+                    "sampler_binding": binding + 1,
+                }))
+                .collect::<Vec<_>>(),
             "textures": textures.iter().map(|t| t.1.clone()).collect::<Vec<_>>(),
             "samplers": textures.iter().map(|t| t.2.clone()).collect::<Vec<_>>(),
         },

@@ -59,7 +59,9 @@ pub const PASS_QUARTER: u32 = 2;
 pub const PASS_CUBEMAP: u32 = 3;
 
 /// The per-pixel built-ins, which live in private globals.
-const PRIVATES: [(&str, &str); 7] = [
+const PRIVATES: [(&str, &str); 9] = [
+    ("HALF_RES_COLOR", "vec4"),
+    ("QUARTER_RES_COLOR", "vec4"),
     ("EYEDIR", "vec3"),
     ("SCREEN_UV", "vec2"),
     ("SKY_COORDS", "vec2"),
@@ -150,8 +152,40 @@ impl Builtins {
             );
             lw.builtins.privates.insert(name, g);
         }
+        // Group 2: the sky's own textures, each with a sampler, declared only when used.
+        for (builtin, name, kind, binding) in SKY_TEXTURES {
+            if lw.shader.builtins_used.contains(builtin) {
+                lw.sky_texture(name, kind, binding);
+            }
+        }
     }
 }
+
+/// The bind group of the sky's own textures (RADIANCE, HALF_RES_COLOR, QUARTER_RES_COLOR).
+pub const SKY_TEXTURE_GROUP: u32 = 2;
+
+/// The sky's own textures: the built-in that needs it, the texture's global name, dimension,
+/// and texture binding (its sampler is the next binding).
+pub const SKY_TEXTURES: [(&str, &str, gdshader::check::types::SamplerKind, u32); 3] = [
+    (
+        "RADIANCE",
+        "RADIANCE",
+        gdshader::check::types::SamplerKind::Cube,
+        0,
+    ),
+    (
+        "HALF_RES_COLOR",
+        "half_res_color",
+        gdshader::check::types::SamplerKind::Tex2D,
+        2,
+    ),
+    (
+        "QUARTER_RES_COLOR",
+        "quarter_res_color",
+        gdshader::check::types::SamplerKind::Tex2D,
+        4,
+    ),
+];
 
 fn load_field(
     b: &mut FnBuilder,
@@ -635,6 +669,42 @@ fn fragment(lw: &mut Lowerer, global: Handle<GlobalVariable>, projection: Projec
         sp,
     );
     set(lw, &mut b, "FOG", zero4);
+    for (name, texture) in [
+        ("HALF_RES_COLOR", "half_res_color"),
+        ("QUARTER_RES_COLOR", "quarter_res_color"),
+    ] {
+        // Godot samples the sub-pass at SCREEN_UV, LOD 0, and divides by the luminance
+        // multiplier to return to shader units.
+        let Some(slot) = lw.textures.get(texture).cloned() else {
+            continue;
+        };
+        let image = b.expr(E::GlobalVariable(slot.image), sp);
+        let sampler = b.expr(E::GlobalVariable(slot.sampler), sp);
+        let texel = b.expr(
+            E::ImageSample {
+                image,
+                sampler,
+                gather: None,
+                coordinate: uv,
+                array_index: None,
+                offset: None,
+                level: naga::SampleLevel::Zero,
+                depth_ref: None,
+                clamp_to_edge: false,
+            },
+            sp,
+        );
+        let lum = load_field(&mut b, global, &[LUMINANCE], sp);
+        let lum = b.expr(
+            E::Splat {
+                size: VectorSize::Quad,
+                value: lum,
+            },
+            sp,
+        );
+        let value = bin(&mut b, Bo::Divide, texel, lum);
+        set(lw, &mut b, name, value);
+    }
     if let Some(sky) = lw.sky_function {
         b.stmt(
             Statement::Call {

@@ -18,18 +18,8 @@ const NOT_YET: &[(&str, &str)] = &[
         "inverse (WGSL has none), umulExtended, imulExtended",
     ),
     (
-        "builtin_texture_functions.gdshader",
-        "sampler uniforms, RADIANCE",
-    ),
-    (
         "builtin_texture_functions_extra.gdshader",
-        "sampler uniforms",
-    ),
-    ("globals_in_helper_function.gdshader", "RADIANCE"),
-    ("render_modes_split_statements.gdshader", "HALF_RES_COLOR"),
-    (
-        "sky_builtins_in_sky.gdshader",
-        "HALF_RES_COLOR, QUARTER_RES_COLOR, RADIANCE",
+        "textureQueryLod (naga has none)",
     ),
     (
         "uniform_groups_global_arrays.gdshader",

@@ -59,6 +59,8 @@ pub struct TextureSlot {
     pub image: Handle<GlobalVariable>,
     /// The sampler global.
     pub sampler: Handle<GlobalVariable>,
+    /// Bind group: the material's, or the sky textures'.
+    pub group: u32,
     /// Binding of the texture (the sampler is the next one).
     pub binding: u32,
     /// 2D, 2D array, 3D, cube, cube array.
@@ -375,6 +377,38 @@ impl<'a> Lowerer<'a> {
     /// Declares the texture and sampler of a sampler uniform: bindings 1 + 2k and 2 + 2k of the
     /// material group, k counting sampler uniforms in declaration order.
     fn texture(&mut self, name: &str, kind: gdshader::check::types::SamplerKind, scalar: GdScalar) {
+        let binding = 1 + 2 * self
+            .textures
+            .values()
+            .filter(|t| t.group == MATERIAL_GROUP)
+            .count() as u32;
+        self.texture_at(name, kind, scalar, MATERIAL_GROUP, binding);
+    }
+
+    /// Declares one of the sky's own textures (RADIANCE, HALF_RES_COLOR, QUARTER_RES_COLOR).
+    pub fn sky_texture(
+        &mut self,
+        name: &str,
+        kind: gdshader::check::types::SamplerKind,
+        binding: u32,
+    ) {
+        self.texture_at(
+            name,
+            kind,
+            GdScalar::Float,
+            crate::wrapper::SKY_TEXTURE_GROUP,
+            binding,
+        );
+    }
+
+    fn texture_at(
+        &mut self,
+        name: &str,
+        kind: gdshader::check::types::SamplerKind,
+        scalar: GdScalar,
+        group: u32,
+        binding: u32,
+    ) {
         use gdshader::check::types::SamplerKind as K;
         let (dim, arrayed) = match kind {
             K::Tex2D => (naga::ImageDimension::D2, false),
@@ -404,16 +438,12 @@ impl<'a> Lowerer<'a> {
             },
             Span::UNDEFINED,
         );
-        let binding = 1 + 2 * self.textures.len() as u32;
         let global = |m: &mut Module, n: String, ty, b| {
             m.global_variables.append(
                 GlobalVariable {
                     name: Some(n),
                     space: AddressSpace::Handle,
-                    binding: Some(ResourceBinding {
-                        group: MATERIAL_GROUP,
-                        binding: b,
-                    }),
+                    binding: Some(ResourceBinding { group, binding: b }),
                     ty,
                     init: None,
                     memory_decorations: MemoryDecorations::empty(),
@@ -433,6 +463,7 @@ impl<'a> Lowerer<'a> {
             TextureSlot {
                 image,
                 sampler,
+                group,
                 binding,
                 kind,
                 scalar,
