@@ -98,7 +98,7 @@ fn a_failed_convert_writes_nothing() {
     let untranslatable = gdsky()
         .args([
             "convert",
-            "tests/shaders/valid/uniform_hints_sampler.gdshader",
+            "tests/shaders/valid/sampler_parameter.gdshader",
             "-o",
         ])
         .arg(&out)

@@ -19,7 +19,7 @@ mod lower;
 pub mod reflect;
 pub mod wrapper;
 
-pub use lower::{MATERIAL_GROUP, TextureSlot, UniformSlot};
+pub use lower::{GLOBAL_UNIFORM_GROUP, MATERIAL_GROUP, TextureSlot, UniformSlot};
 pub use wrapper::Projection;
 
 use gdshader::parse::ast;
@@ -134,11 +134,13 @@ pub fn validate(front: &FrontendOutput, module: &naga::Module) -> Result<ModuleI
 }
 
 /// The validator gdsky uses: everything checked except uniformity of control flow, since GLSL
-/// (and so Godot) allows derivatives and implicit-LOD sampling in non-uniform control flow.
+/// (and so Godot) allows derivatives and implicit-LOD sampling in non-uniform control flow;
+/// with naga's default capabilities plus packing halves into 32-bit words (`packHalf2x16`),
+/// which every Vulkan device does (wgpu's `DownlevelFlags::SHADER_F16_IN_F32`).
 pub fn validator() -> Validator {
     Validator::new(
         ValidationFlags::all() - ValidationFlags::CONTROL_FLOW_UNIFORMITY,
-        Capabilities::default(),
+        Capabilities::default() | Capabilities::SHADER_FLOAT16_IN_FLOAT32,
     )
 }
 

@@ -81,14 +81,16 @@ pub fn reflection(
     let uniforms: Vec<Value> = shader
         .uniforms
         .iter()
-        .filter(|u| !baked.contains_key(&u.name) && !lowered.textures.contains_key(&u.name))
+        .filter(|u| lowered.uniforms.contains_key(&u.name))
         .map(|u| {
             let slot = lowered.uniforms.get(&u.name);
             json!({
                 "name": u.name,
                 "type": u.ty.display(&structs).to_string(),
+                "block": slot.map(|s| if s.group == MATERIAL_GROUP { "material" } else { "global_uniforms" }),
                 "offset": slot.map(|s| s.offset),
                 "size": slot.map(|s| s.size),
+                "array_stride": slot.and_then(|s| s.stride),
                 "default": u.default.as_ref().map(value_json),
                 "hints": u.hints.iter().map(|h| json!({ "name": h.name, "args": h.args })).collect::<Vec<_>>(),
                 "group": u.group.join("."),
@@ -99,11 +101,18 @@ pub fn reflection(
     let mut textures: Vec<(u32, Value, Value)> = shader
         .uniforms
         .iter()
-        .filter_map(|u| {
-            let slot = lowered.textures.get(&u.name)?;
+        .flat_map(|u| {
+            let names: Vec<String> = match &u.ty {
+                Type::Array(_, n) => (0..*n).map(|i| format!("{}_{i}", u.name)).collect(),
+                _ => vec![u.name.clone()],
+            };
+            names.into_iter().filter_map(move |n| lowered.textures.get(&n).map(|slot| (u, n, slot)))
+        })
+        .map(|(u, texture_name, slot)| {
             let hint = |prefix: &str| u.hints.iter().find(|h| h.name.starts_with(prefix)).map(|h| h.name.clone());
             let texture = json!({
-                "name": u.name,
+                "name": texture_name,
+                "uniform": u.name,
                 "group": MATERIAL_GROUP,
                 "binding": slot.binding,
                 "type": u.ty.display(&structs).to_string(),
@@ -115,14 +124,14 @@ pub fn reflection(
             // Godot's default for sky shaders: linear filtering with mipmaps, repeat on.
             let filter = hint("filter_").unwrap_or_else(|| "filter_linear_mipmap".into());
             let sampler = json!({
-                "name": format!("{}_sampler", u.name),
-                "texture": u.name,
+                "name": format!("{texture_name}_sampler"),
+                "texture": texture_name,
                 "group": MATERIAL_GROUP,
                 "binding": slot.binding + 1,
                 "filter": filter.trim_start_matches("filter_"),
                 "repeat": hint("repeat_").is_none_or(|r| r == "repeat_enable"),
             });
-            Some((slot.binding, texture, sampler))
+            (slot.binding, texture, sampler)
         })
         .collect();
     textures.sort_by_key(|t| t.0);
@@ -166,6 +175,12 @@ pub fn reflection(
                 "binding": 0,
                 "struct": "Material",
                 "size": lowered.material_size,
+            },
+            "global_uniforms": {
+                "group": crate::GLOBAL_UNIFORM_GROUP,
+                "binding": 0,
+                "struct": "GlobalUniforms",
+                "declared": lowered.uniforms.values().any(|s| s.group == crate::GLOBAL_UNIFORM_GROUP),
             },
             "sky_textures": crate::wrapper::SKY_TEXTURES
                 .iter()

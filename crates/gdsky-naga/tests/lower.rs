@@ -12,21 +12,10 @@ fn root() -> PathBuf {
 
 /// Shaders that use what the lowering does not translate yet, with the reason. Keeping the list
 /// here makes a shader that starts (or stops) lowering a visible change.
-const NOT_YET: &[(&str, &str)] = &[
-    (
-        "builtin_functions_overloads.gdshader",
-        "inverse (WGSL has none), umulExtended, imulExtended",
-    ),
-    (
-        "builtin_texture_functions_extra.gdshader",
-        "textureQueryLod (naga has none)",
-    ),
-    (
-        "uniform_groups_global_arrays.gdshader",
-        "global uniforms, uniform float arrays",
-    ),
-    ("uniform_hints_sampler.gdshader", "arrays of samplers"),
-];
+const NOT_YET: &[(&str, &str)] = &[(
+    "sampler_parameter.gdshader",
+    "samplers as function parameters",
+)];
 
 struct Converted {
     wgsl: String,

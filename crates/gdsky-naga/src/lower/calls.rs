@@ -30,6 +30,7 @@ pub(super) fn builtin(
     // Functions with an `out` argument take the place, not its value.
     match name {
         "modf" | "frexp" => return out_struct_call(ctx, b, e, name, args),
+        "umulExtended" | "imulExtended" => return mul_extended(ctx, b, e, name, args, types),
         "uaddCarry" | "usubBorrow" => {
             // sum = x + y, carry = sum < x; diff = x - y, borrow = x < y (as 0u or 1u).
             let (x, y) = (ctx.value(b, &args[0])?, ctx.value(b, &args[1])?);
@@ -198,7 +199,49 @@ pub(super) fn builtin(
         "reflect" => math(b, Mf::Reflect, &v, sp),
         "refract" => math(b, Mf::Refract, &v, sp),
         "faceforward" => math(b, Mf::FaceForward, &v, sp),
-        "outerProduct" => math(b, Mf::Outer, &v, sp),
+        "outerProduct" => {
+            // WGSL has no outer product: column j is c * r[j].
+            let (GdType::Vector(_, n), Some(th)) = (
+                &types[0],
+                ctx.naga_type(&GdType::Matrix(types[0].components().unwrap_or(2)), e.span),
+            ) else {
+                return None;
+            };
+            let columns = (0..*n)
+                .map(|j| {
+                    let rj = b.expr(
+                        E::AccessIndex {
+                            base: v[1],
+                            index: u32::from(j),
+                        },
+                        sp,
+                    );
+                    b.expr(
+                        E::Binary {
+                            op: Bo::Multiply,
+                            left: v[0],
+                            right: rj,
+                        },
+                        sp,
+                    )
+                })
+                .collect();
+            b.expr(
+                E::Compose {
+                    ty: th,
+                    components: columns,
+                },
+                sp,
+            )
+        }
+        "inverse" => {
+            let GdType::Matrix(n) = types[0] else {
+                return None;
+            };
+            let th = ctx.naga_type(&types[0], e.span)?;
+            let col_ty = ctx.naga_type(&GdType::Vector(GdScalar::Float, n), e.span)?;
+            inverse(b, v[0], n, th, col_ty, sp)
+        }
         "matrixCompMult" => {
             let (GdType::Matrix(n), Some(th)) = (&types[0], ctx.naga_type(&types[0], e.span))
             else {
@@ -552,6 +595,18 @@ fn out_struct_call(
     let sp = span(e.span);
     let x = ctx.value(b, &args[0])?;
     let fun = if name == "modf" { Mf::Modf } else { Mf::Frexp };
+    // naga types the result with a predeclared struct the module must hold.
+    let size = match ctx.type_of(&args[0]) {
+        Some(GdType::Vector(_, n)) => Some(vector_size(n)),
+        _ => None,
+    };
+    let scalar = naga::Scalar::F32;
+    let predeclared = if name == "modf" {
+        naga::PredeclaredType::ModfResult { size, scalar }
+    } else {
+        naga::PredeclaredType::FrexpResult { size, scalar }
+    };
+    ctx.lw.module.generate_predeclared_type(predeclared);
     let both = math(b, fun, &[x], sp);
     let first = b.expr(
         E::AccessIndex {
@@ -595,6 +650,13 @@ fn texture_call(
     let sp = span(e.span);
     let slot = match &args[0].kind {
         ast::ExprKind::Ident(id) => ctx.lw.textures.get(&id.name).cloned(),
+        // An element of a sampler array, by a constant index: its own binding.
+        ast::ExprKind::Index { base, index } => match (&base.kind, &index.kind) {
+            (ast::ExprKind::Ident(id), ast::ExprKind::IntLit(i)) => {
+                ctx.lw.textures.get(&format!("{}_{i}", id.name)).cloned()
+            }
+            _ => None,
+        },
         _ => None,
     };
     let Some(slot) = slot else {
@@ -849,6 +911,100 @@ fn texture_call(
                 sp,
             )
         }
+        "textureQueryLod" => {
+            // naga has no LOD query: compute it as GLSL defines it for an isotropic footprint,
+            // λ = log2(ρ) with ρ the larger screen-space derivative of the texel coordinate;
+            // returns (λ clamped to the mip chain, λ).
+            float_only(ctx)?;
+            let size = b.expr(
+                E::ImageQuery {
+                    image,
+                    query: naga::ImageQuery::Size { level: None },
+                },
+                sp,
+            );
+            let size = b.expr(
+                E::As {
+                    expr: size,
+                    kind: ScalarKind::Float,
+                    convert: Some(4),
+                },
+                sp,
+            );
+            let texel = b.expr(
+                E::Binary {
+                    op: Bo::Multiply,
+                    left: rest[0],
+                    right: size,
+                },
+                sp,
+            );
+            let dx = b.expr(
+                E::Derivative {
+                    axis: DerivativeAxis::X,
+                    ctrl: DerivativeControl::None,
+                    expr: texel,
+                },
+                sp,
+            );
+            let dy = b.expr(
+                E::Derivative {
+                    axis: DerivativeAxis::Y,
+                    ctrl: DerivativeControl::None,
+                    expr: texel,
+                },
+                sp,
+            );
+            let (dxx, dyy) = (
+                math(b, Mf::Dot, &[dx, dx], sp),
+                math(b, Mf::Dot, &[dy, dy], sp),
+            );
+            let rho2 = math(b, Mf::Max, &[dxx, dyy], sp);
+            let l2 = math(b, Mf::Log2, &[rho2], sp);
+            let half = b.expr(E::Literal(naga::Literal::F32(0.5)), sp);
+            let lambda = b.expr(
+                E::Binary {
+                    op: Bo::Multiply,
+                    left: l2,
+                    right: half,
+                },
+                sp,
+            );
+            let levels = b.expr(
+                E::ImageQuery {
+                    image,
+                    query: naga::ImageQuery::NumLevels,
+                },
+                sp,
+            );
+            let levels = b.expr(
+                E::As {
+                    expr: levels,
+                    kind: ScalarKind::Float,
+                    convert: Some(4),
+                },
+                sp,
+            );
+            let one = b.expr(E::Literal(naga::Literal::F32(1.0)), sp);
+            let top = b.expr(
+                E::Binary {
+                    op: Bo::Subtract,
+                    left: levels,
+                    right: one,
+                },
+                sp,
+            );
+            let zero = b.expr(E::Literal(naga::Literal::F32(0.0)), sp);
+            let clamped = math(b, Mf::Clamp, &[lambda, zero, top], sp);
+            let ret = ctx.naga_type(&GdType::Vector(GdScalar::Float, 2), e.span)?;
+            b.expr(
+                E::Compose {
+                    ty: ret,
+                    components: vec![clamped, lambda],
+                },
+                sp,
+            )
+        }
         "textureQueryLevels" => {
             let levels = b.expr(
                 E::ImageQuery {
@@ -869,4 +1025,305 @@ fn texture_call(
         _ => return ctx.unsupported(e, &format!("the built-in function `{name}`")),
     };
     Some(h)
+}
+
+/// `inverse(m)` by the adjugate: WGSL has no matrix inverse. Element (row r, column c) of the
+/// inverse is the cofactor C(c, r) over the determinant.
+fn inverse(
+    b: &mut FnBuilder,
+    m: H,
+    n: u8,
+    mat_ty: Handle<naga::Type>,
+    col_ty: Handle<naga::Type>,
+    sp: naga::Span,
+) -> H {
+    let n = usize::from(n);
+    let cols: Vec<H> = (0..n)
+        .map(|c| {
+            b.expr(
+                E::AccessIndex {
+                    base: m,
+                    index: c as u32,
+                },
+                sp,
+            )
+        })
+        .collect();
+    // at[r][c]: row r, column c.
+    let at: Vec<Vec<H>> = (0..n)
+        .map(|r| {
+            cols.iter()
+                .map(|&col| {
+                    b.expr(
+                        E::AccessIndex {
+                            base: col,
+                            index: r as u32,
+                        },
+                        sp,
+                    )
+                })
+                .collect()
+        })
+        .collect();
+    fn det(b: &mut FnBuilder, at: &[Vec<H>], rows: &[usize], cols: &[usize], sp: naga::Span) -> H {
+        if rows.len() == 1 {
+            return at[rows[0]][cols[0]];
+        }
+        let mut sum: Option<H> = None;
+        for (i, &c) in cols.iter().enumerate() {
+            let rest: Vec<usize> = cols.iter().copied().filter(|&x| x != c).collect();
+            let minor = det(b, at, &rows[1..], &rest, sp);
+            let term = b.expr(
+                E::Binary {
+                    op: Bo::Multiply,
+                    left: at[rows[0]][c],
+                    right: minor,
+                },
+                sp,
+            );
+            sum = Some(match sum {
+                None => term,
+                Some(acc) => b.expr(
+                    E::Binary {
+                        op: if i % 2 == 0 { Bo::Add } else { Bo::Subtract },
+                        left: acc,
+                        right: term,
+                    },
+                    sp,
+                ),
+            });
+        }
+        sum.unwrap_or(at[rows[0]][cols[0]])
+    }
+    let all: Vec<usize> = (0..n).collect();
+    let cofactor = |b: &mut FnBuilder, r: usize, c: usize| {
+        let rows: Vec<usize> = all.iter().copied().filter(|&x| x != r).collect();
+        let cs: Vec<usize> = all.iter().copied().filter(|&x| x != c).collect();
+        let d = det(b, &at, &rows, &cs, sp);
+        if (r + c).is_multiple_of(2) {
+            d
+        } else {
+            b.expr(
+                E::Unary {
+                    op: UnaryOperator::Negate,
+                    expr: d,
+                },
+                sp,
+            )
+        }
+    };
+    let first_row: Vec<H> = (0..n).map(|c| cofactor(b, 0, c)).collect();
+    let mut d: Option<H> = None;
+    for (c, &cf) in first_row.iter().enumerate() {
+        let term = b.expr(
+            E::Binary {
+                op: Bo::Multiply,
+                left: at[0][c],
+                right: cf,
+            },
+            sp,
+        );
+        d = Some(match d {
+            None => term,
+            Some(acc) => b.expr(
+                E::Binary {
+                    op: Bo::Add,
+                    left: acc,
+                    right: term,
+                },
+                sp,
+            ),
+        });
+    }
+    let one = b.expr(E::Literal(naga::Literal::F32(1.0)), sp);
+    let inv_det = b.expr(
+        E::Binary {
+            op: Bo::Divide,
+            left: one,
+            right: d.unwrap_or(one),
+        },
+        sp,
+    );
+    // Column c of the inverse holds rows r: C(c, r) / det.
+    let columns = (0..n)
+        .map(|c| {
+            let comps = (0..n)
+                .map(|r| {
+                    let cf = if c == 0 {
+                        first_row[r]
+                    } else {
+                        cofactor(b, c, r)
+                    };
+                    b.expr(
+                        E::Binary {
+                            op: Bo::Multiply,
+                            left: cf,
+                            right: inv_det,
+                        },
+                        sp,
+                    )
+                })
+                .collect();
+            b.expr(
+                E::Compose {
+                    ty: col_ty,
+                    components: comps,
+                },
+                sp,
+            )
+        })
+        .collect();
+    b.expr(
+        E::Compose {
+            ty: mat_ty,
+            components: columns,
+        },
+        sp,
+    )
+}
+
+/// `umulExtended(x, y, out msb, out lsb)` / `imulExtended`: the 64-bit product in two halves,
+/// from 16-bit partial products (WGSL has no widening multiply).
+fn mul_extended(
+    ctx: &mut FnCtx,
+    b: &mut FnBuilder,
+    e: &Expr,
+    name: &str,
+    args: &[Expr],
+    types: &[GdType],
+) -> Option<H> {
+    let sp = span(e.span);
+    let n = match types[0] {
+        GdType::Vector(_, n) => Some(n),
+        _ => None,
+    };
+    let lit = |b: &mut FnBuilder, v: u32| {
+        let l = b.expr(E::Literal(naga::Literal::U32(v)), sp);
+        match n {
+            Some(n) => b.expr(
+                E::Splat {
+                    size: vector_size(n),
+                    value: l,
+                },
+                sp,
+            ),
+            None => l,
+        }
+    };
+    let signed = name == "imulExtended";
+    let (x, y) = (ctx.value(b, &args[0])?, ctx.value(b, &args[1])?);
+    let as_u = |b: &mut FnBuilder, h: H| {
+        if signed {
+            b.expr(
+                E::As {
+                    expr: h,
+                    kind: ScalarKind::Uint,
+                    convert: None,
+                },
+                sp,
+            )
+        } else {
+            h
+        }
+    };
+    let (xu, yu) = (as_u(b, x), as_u(b, y));
+    let bin = |b: &mut FnBuilder, op, l, r| {
+        b.expr(
+            E::Binary {
+                op,
+                left: l,
+                right: r,
+            },
+            sp,
+        )
+    };
+    let (mask, sixteen) = (lit(b, 0xffff), lit(b, 16));
+    let (x0, x1) = (
+        bin(b, Bo::And, xu, mask),
+        bin(b, Bo::ShiftRight, xu, sixteen),
+    );
+    let (y0, y1) = (
+        bin(b, Bo::And, yu, mask),
+        bin(b, Bo::ShiftRight, yu, sixteen),
+    );
+    let p00 = bin(b, Bo::Multiply, x0, y0);
+    let p01 = bin(b, Bo::Multiply, x0, y1);
+    let p10 = bin(b, Bo::Multiply, x1, y0);
+    let p11 = bin(b, Bo::Multiply, x1, y1);
+    let p00h = bin(b, Bo::ShiftRight, p00, sixteen);
+    let (p01l, p10l) = (bin(b, Bo::And, p01, mask), bin(b, Bo::And, p10, mask));
+    let mid = bin(b, Bo::Add, p00h, p01l);
+    let mid = bin(b, Bo::Add, mid, p10l);
+    let (p01h, p10h, midh) = (
+        bin(b, Bo::ShiftRight, p01, sixteen),
+        bin(b, Bo::ShiftRight, p10, sixteen),
+        bin(b, Bo::ShiftRight, mid, sixteen),
+    );
+    let hi = bin(b, Bo::Add, p11, p01h);
+    let hi = bin(b, Bo::Add, hi, p10h);
+    let mut hi = bin(b, Bo::Add, hi, midh);
+    let lo = bin(b, Bo::Multiply, xu, yu);
+    if signed {
+        // Two's complement: subtract y when x < 0 and x when y < 0 from the high half.
+        let zero_i = b.expr(E::Literal(naga::Literal::I32(0)), sp);
+        let zero_i = match n {
+            Some(n) => b.expr(
+                E::Splat {
+                    size: vector_size(n),
+                    value: zero_i,
+                },
+                sp,
+            ),
+            None => zero_i,
+        };
+        let zero_u = lit(b, 0);
+        let x_neg = bin(b, Bo::Less, x, zero_i);
+        let y_neg = bin(b, Bo::Less, y, zero_i);
+        let sub_y = b.expr(
+            E::Select {
+                condition: x_neg,
+                accept: yu,
+                reject: zero_u,
+            },
+            sp,
+        );
+        let sub_x = b.expr(
+            E::Select {
+                condition: y_neg,
+                accept: xu,
+                reject: zero_u,
+            },
+            sp,
+        );
+        hi = bin(b, Bo::Subtract, hi, sub_y);
+        hi = bin(b, Bo::Subtract, hi, sub_x);
+    }
+    let back = |b: &mut FnBuilder, h: H| {
+        if signed {
+            b.expr(
+                E::As {
+                    expr: h,
+                    kind: ScalarKind::Sint,
+                    convert: None,
+                },
+                sp,
+            )
+        } else {
+            h
+        }
+    };
+    let (hi, lo) = (back(b, hi), back(b, lo));
+    for (arg, value) in [(&args[2], hi), (&args[3], lo)] {
+        let Some(super::expr::Val::Pointer(ptr)) = ctx.lower(b, arg) else {
+            return ctx.unsupported(e, &format!("`{name}` with this output argument"));
+        };
+        b.stmt(
+            Statement::Store {
+                pointer: ptr,
+                value,
+            },
+            sp,
+        );
+    }
+    Some(b.expr(E::Literal(naga::Literal::Bool(false)), sp))
 }

@@ -464,8 +464,7 @@ impl<'l, 'a> FnCtx<'l, 'a> {
             );
         }
         if let Some(slot) = self.lw.uniforms.get(&id.name).cloned() {
-            let material = self.lw.material?;
-            let g = b.expr(E::GlobalVariable(material), sp);
+            let g = b.expr(E::GlobalVariable(slot.block), sp);
             let ptr = b.expr(
                 E::AccessIndex {
                     base: g,
@@ -474,30 +473,10 @@ impl<'l, 'a> FnCtx<'l, 'a> {
                 sp,
             );
             let loaded = b.expr(E::Load { pointer: ptr }, sp);
-            return Some(Val::Value(match slot.ty {
-                GdType::Scalar(GdScalar::Bool) | GdType::Vector(GdScalar::Bool, _) => {
-                    let zero = b.expr(E::Literal(Literal::U32(0)), sp);
-                    let zero = match slot.ty {
-                        GdType::Vector(_, n) => b.expr(
-                            E::Splat {
-                                size: vector_size(n),
-                                value: zero,
-                            },
-                            sp,
-                        ),
-                        _ => zero,
-                    };
-                    b.expr(
-                        E::Binary {
-                            op: Bo::NotEqual,
-                            left: loaded,
-                            right: zero,
-                        },
-                        sp,
-                    )
-                }
-                _ => loaded,
-            }));
+            return self
+                .lw
+                .uniform_value(b, loaded, &slot.ty, sp)
+                .map(Val::Value);
         }
         let ty = self.type_of(e)?;
         crate::wrapper::read_builtin(self.lw, b, &id.name, &ty, id.span)

@@ -38,11 +38,17 @@ use std::num::NonZeroU32;
 
 /// The bind group of the material uniform block and its textures.
 pub const MATERIAL_GROUP: u32 = 1;
+/// The bind group of Godot's global uniforms (`global uniform`), binding 0.
+pub const GLOBAL_UNIFORM_GROUP: u32 = 3;
 
 /// Where a uniform lives in the material block.
 #[derive(Clone, Debug)]
 pub struct UniformSlot {
-    /// Member index in the material struct.
+    /// The block's global variable.
+    pub block: Handle<GlobalVariable>,
+    /// The block's bind group ([`MATERIAL_GROUP`] or [`GLOBAL_UNIFORM_GROUP`]).
+    pub group: u32,
+    /// Member index in the block's struct.
     pub member: u32,
     /// The shader's type of the uniform.
     pub ty: GdType,
@@ -50,6 +56,9 @@ pub struct UniformSlot {
     pub offset: u32,
     /// Byte size.
     pub size: u32,
+    /// For arrays, the byte stride between elements (16 for every uniform array: scalars and
+    /// 2-vectors travel as the first components of 4-vectors).
+    pub stride: Option<u32>,
 }
 
 /// A sampler uniform as a texture and a sampler in the material group.
@@ -93,7 +102,6 @@ pub(crate) struct Lowerer<'a> {
     layouter: Layouter,
     types: HashMap<GdType, Handle<Type>>,
     struct_types: Vec<Handle<Type>>,
-    material: Option<Handle<GlobalVariable>>,
     pub uniforms: HashMap<String, UniformSlot>,
     /// Size in bytes of the material block (0 when there is none).
     pub material_size: u32,
@@ -121,7 +129,6 @@ impl<'a> Lowerer<'a> {
             layouter: Layouter::default(),
             types: HashMap::new(),
             struct_types: Vec::new(),
-            material: None,
             uniforms: HashMap::new(),
             material_size: 0,
             textures: HashMap::new(),
@@ -277,29 +284,109 @@ impl<'a> Lowerer<'a> {
         match ty {
             GdType::Scalar(GdScalar::Bool) => self.ty(&GdType::UINT, at),
             GdType::Vector(GdScalar::Bool, n) => self.ty(&GdType::Vector(GdScalar::UInt, *n), at),
-            GdType::Array(elem, _)
-                if matches!(**elem, GdType::Scalar(_) | GdType::Vector(_, 2)) =>
-            {
-                // WGSL requires a 16-byte array stride in uniform buffers, which a float or vec2
-                // array does not have in WGSL's layout.
-                self.error(at, "gdsky cannot translate uniform arrays of scalars or 2-vectors yet (WGSL needs a 16-byte stride)");
-                None
-            }
-            GdType::Sampler(..) => {
-                self.error(at, "gdsky cannot translate sampler uniforms yet");
-                None
+            GdType::Array(elem, n) => {
+                // The uniform address space needs a 16-byte array stride: scalars and 2-vectors
+                // travel as the first components of 4-vectors (std140's layout, too).
+                let base = match &**elem {
+                    GdType::Scalar(s) | GdType::Vector(s, 2) => {
+                        let s = if *s == GdScalar::Bool {
+                            GdScalar::UInt
+                        } else {
+                            *s
+                        };
+                        self.ty(&GdType::Vector(s, 4), at)?
+                    }
+                    other => self.uniform_ty(other, at)?,
+                };
+                Some(self.uniform_array(base, *n))
             }
             other => self.ty(other, at),
         }
     }
 
+    /// A value loaded from a uniform block, turned back into the shader's type: `u32` into
+    /// `bool`, padded array elements into their scalars or 2-vectors.
+    pub(crate) fn uniform_value(
+        &mut self,
+        b: &mut FnBuilder,
+        v: Handle<Expression>,
+        ty: &GdType,
+        sp: Span,
+    ) -> Option<Handle<Expression>> {
+        Some(match ty {
+            GdType::Scalar(GdScalar::Bool) | GdType::Vector(GdScalar::Bool, _) => {
+                let zero = b.expr(Expression::Literal(Literal::U32(0)), sp);
+                let zero = match ty {
+                    GdType::Vector(_, n) => b.expr(
+                        Expression::Splat {
+                            size: vector_size(*n),
+                            value: zero,
+                        },
+                        sp,
+                    ),
+                    _ => zero,
+                };
+                b.expr(
+                    Expression::Binary {
+                        op: naga::BinaryOperator::NotEqual,
+                        left: v,
+                        right: zero,
+                    },
+                    sp,
+                )
+            }
+            GdType::Array(elem, n)
+                if matches!(
+                    **elem,
+                    GdType::Scalar(_) | GdType::Vector(_, 2) | GdType::Vector(GdScalar::Bool, _)
+                ) =>
+            {
+                let th = self.ty(ty, ast::Span::default())?;
+                let mut components = Vec::new();
+                for i in 0..*n {
+                    let item = b.expr(Expression::AccessIndex { base: v, index: i }, sp);
+                    let item = match &**elem {
+                        GdType::Scalar(_) => b.expr(
+                            Expression::AccessIndex {
+                                base: item,
+                                index: 0,
+                            },
+                            sp,
+                        ),
+                        GdType::Vector(_, 2) => {
+                            let pattern = [
+                                naga::SwizzleComponent::X,
+                                naga::SwizzleComponent::Y,
+                                naga::SwizzleComponent::X,
+                                naga::SwizzleComponent::X,
+                            ];
+                            b.expr(
+                                Expression::Swizzle {
+                                    size: VectorSize::Bi,
+                                    vector: item,
+                                    pattern,
+                                },
+                                sp,
+                            )
+                        }
+                        _ => item,
+                    };
+                    components.push(self.uniform_value(b, item, elem, sp)?);
+                }
+                b.expr(Expression::Compose { ty: th, components }, sp)
+            }
+            _ => v,
+        })
+    }
+
     /// The material block: every non-sampler uniform, in declaration order, laid out by naga's
-    /// layouter with the uniform address space's rules.
+    /// layouter with the uniform address space's rules; sampler uniforms become textures; and
+    /// `global uniform`s go to their own block (Godot's global uniform buffer).
     fn material_block(&mut self) {
         let shader = self.shader;
         let mut members = Vec::new();
-        let mut names = Vec::new();
-        for u in shader.uniforms.iter().filter(|u| !u.global) {
+        let mut globals = Vec::new();
+        for u in &shader.uniforms {
             let at = self.uniform_span(&u.name);
             if let Some(value) = self.baked.get(&u.name).cloned() {
                 // A baked uniform is a constant: the compiler folds it, and it leaves the block.
@@ -319,59 +406,97 @@ impl<'a> Lowerer<'a> {
                 }
                 continue;
             }
-            if let GdType::Sampler(kind, scalar) = u.ty {
-                self.texture(&u.name, kind, scalar);
-                continue;
+            match &u.ty {
+                GdType::Sampler(kind, scalar) if !u.global => self.texture(&u.name, *kind, *scalar),
+                GdType::Array(elem, n) if matches!(**elem, GdType::Sampler(..)) && !u.global => {
+                    // A sampler array is one texture binding per element: `tex_0`, `tex_1`, …
+                    if let GdType::Sampler(kind, scalar) = **elem {
+                        for i in 0..*n {
+                            self.texture(&format!("{}_{i}", u.name), kind, scalar);
+                        }
+                    }
+                }
+                GdType::Sampler(..) => self.error(
+                    at,
+                    format!(
+                        "gdsky cannot translate the global sampler uniform `{}` yet",
+                        u.name
+                    ),
+                ),
+                ty => {
+                    let Some(h) = self.uniform_ty(ty, at) else {
+                        continue;
+                    };
+                    let list = if u.global { &mut globals } else { &mut members };
+                    list.push((u.name.clone(), h, u.ty.clone()));
+                }
             }
-            let Some(h) = self.uniform_ty(&u.ty, at) else {
-                continue;
-            };
-            members.push((u.name.clone(), h));
-            names.push((u.name.clone(), u.ty.clone()));
         }
-        for u in shader.uniforms.iter().filter(|u| u.global) {
-            let at = self.uniform_span(&u.name);
-            self.error(at, format!("gdsky cannot translate `global uniform {}` yet (Godot's global uniform buffer)", u.name));
+        if let Some(size) = self.uniform_block(members, "Material", "material", MATERIAL_GROUP) {
+            self.material_size = size;
         }
+        self.uniform_block(
+            globals,
+            "GlobalUniforms",
+            "global_uniforms",
+            GLOBAL_UNIFORM_GROUP,
+        );
+    }
+
+    /// Declares a uniform block of `members` (name, naga type, shader type) at binding 0 of
+    /// `group`, recording each member's slot. Returns the block's size, or `None` when empty.
+    fn uniform_block(
+        &mut self,
+        members: Vec<(String, Handle<Type>, GdType)>,
+        struct_name: &str,
+        global_name: &str,
+        group: u32,
+    ) -> Option<u32> {
         if members.is_empty() {
-            return;
+            return None;
         }
-        let ty = self.struct_type("Material", &members, true);
-        if let TypeInner::Struct {
-            members: laid,
-            span,
-        } = &self.module.types[ty].inner
-        {
-            self.material_size = *span;
-            let _ = self.layouter.update(self.module.to_ctx());
-            for (i, ((name, gd), m)) in names.into_iter().zip(laid).enumerate() {
-                let size = self.layouter[m.ty].size;
-                self.uniforms.insert(
-                    name,
-                    UniformSlot {
-                        member: i as u32,
-                        ty: gd,
-                        offset: m.offset,
-                        size,
-                    },
-                );
-            }
-        }
+        let fields: Vec<(String, Handle<Type>)> =
+            members.iter().map(|(n, h, _)| (n.clone(), *h)).collect();
+        let ty = self.struct_type(struct_name, &fields, true);
         let global = self.module.global_variables.append(
             GlobalVariable {
-                name: Some("material".into()),
+                name: Some(global_name.into()),
                 space: AddressSpace::Uniform,
-                binding: Some(ResourceBinding {
-                    group: MATERIAL_GROUP,
-                    binding: 0,
-                }),
+                binding: Some(ResourceBinding { group, binding: 0 }),
                 ty,
                 init: None,
                 memory_decorations: MemoryDecorations::empty(),
             },
             Span::UNDEFINED,
         );
-        self.material = Some(global);
+        let TypeInner::Struct {
+            members: laid,
+            span,
+        } = self.module.types[ty].inner.clone()
+        else {
+            return None;
+        };
+        let _ = self.layouter.update(self.module.to_ctx());
+        for (i, ((name, _, gd), m)) in members.into_iter().zip(&laid).enumerate() {
+            let size = self.layouter[m.ty].size;
+            let stride = match self.module.types[m.ty].inner {
+                TypeInner::Array { stride, .. } => Some(stride),
+                _ => None,
+            };
+            self.uniforms.insert(
+                name,
+                UniformSlot {
+                    block: global,
+                    group,
+                    member: i as u32,
+                    ty: gd,
+                    offset: m.offset,
+                    size,
+                    stride,
+                },
+            );
+        }
+        Some(span)
     }
 
     /// Declares the texture and sampler of a sampler uniform: bindings 1 + 2k and 2 + 2k of the
