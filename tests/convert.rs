@@ -95,15 +95,24 @@ fn a_failed_convert_writes_nothing() {
     assert_eq!(run.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&run.stderr).contains("int_plus_float.gdshader:8:15"));
     assert!(!out.exists() || std::fs::read_dir(&out).map(|d| d.count()).unwrap_or(0) == 0);
+    // Valid Godot that gdsky does not translate yet: a sampler array indexed at run time.
+    let shader = std::env::temp_dir().join(format!(
+        "gdsky-untranslatable-{}.gdshader",
+        std::process::id()
+    ));
+    std::fs::write(
+        &shader,
+        "shader_type sky;\nuniform sampler2D layers[2];\nvoid sky() {\n    int i = int(TIME) % 2;\n    COLOR = texture(layers[i], SKY_COORDS).rgb;\n}\n",
+    )
+    .expect("temp shader");
     let untranslatable = gdsky()
-        .args([
-            "convert",
-            "tests/shaders/valid/sampler_parameter.gdshader",
-            "-o",
-        ])
+        .arg("convert")
+        .arg(&shader)
+        .arg("-o")
         .arg(&out)
         .output()
         .expect("runs");
+    let _ = std::fs::remove_file(&shader);
     assert_eq!(untranslatable.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&untranslatable.stderr).contains("E600"));
     assert!(!out.exists() || std::fs::read_dir(&out).map(|d| d.count()).unwrap_or(0) == 0);

@@ -12,10 +12,7 @@ fn root() -> PathBuf {
 
 /// Shaders that use what the lowering does not translate yet, with the reason. Keeping the list
 /// here makes a shader that starts (or stops) lowering a visible change.
-const NOT_YET: &[(&str, &str)] = &[(
-    "sampler_parameter.gdshader",
-    "samplers as function parameters",
-)];
+const NOT_YET: &[(&str, &str)] = &[];
 
 struct Converted {
     wgsl: String,

@@ -648,30 +648,17 @@ fn texture_call(
 ) -> Option<H> {
     use gdshader::check::types::SamplerKind as K;
     let sp = span(e.span);
-    let slot = match &args[0].kind {
-        ast::ExprKind::Ident(id) => ctx.lw.textures.get(&id.name).cloned(),
-        // An element of a sampler array, by a constant index: its own binding.
-        ast::ExprKind::Index { base, index } => match (&base.kind, &index.kind) {
-            (ast::ExprKind::Ident(id), ast::ExprKind::IntLit(i)) => {
-                ctx.lw.textures.get(&format!("{}_{i}", id.name)).cloned()
-            }
-            _ => None,
-        },
-        _ => None,
-    };
-    let Some(slot) = slot else {
+    let Some((image, sampler, kind, scalar)) = ctx.sampler(b, &args[0]) else {
         return ctx.unsupported(
             e,
-            &format!("`{name}` on this sampler (only sampler uniforms are translated)"),
+            &format!("`{name}` on this sampler (a dynamically indexed sampler array)"),
         );
     };
-    let image = b.expr(E::GlobalVariable(slot.image), sp);
-    let sampler = b.expr(E::GlobalVariable(slot.sampler), sp);
     let rest: Vec<H> = args[1..]
         .iter()
         .map(|a| ctx.value(b, a))
         .collect::<Option<_>>()?;
-    let arrayed = matches!(slot.kind, K::Tex2DArray | K::CubeArray);
+    let arrayed = matches!(kind, K::Tex2DArray | K::CubeArray);
     // GLSL puts an array layer in the last coordinate; naga takes it apart.
     let split = |b: &mut FnBuilder, coord: H, n: u8| -> (H, Option<H>) {
         if !arrayed {
@@ -733,7 +720,7 @@ fn texture_call(
         )
     };
     let float_only = |ctx: &mut FnCtx| -> Option<()> {
-        if slot.scalar == GdScalar::Float {
+        if scalar == GdScalar::Float {
             Some(())
         } else {
             ctx.unsupported(
@@ -751,7 +738,7 @@ fn texture_call(
             },
             sp,
         );
-        let n = if matches!(slot.kind, K::Tex3D) { 3 } else { 2 };
+        let n = if matches!(kind, K::Tex3D) { 3 } else { 2 };
         let pattern = [
             naga::SwizzleComponent::X,
             naga::SwizzleComponent::Y,

@@ -40,6 +40,8 @@ enum LocalSlot {
     OutParam(u32),
     /// An `in` parameter the body never assigns: read straight from the argument.
     Argument(u32),
+    /// A sampler parameter: texture argument `index`, its sampler at `index + 1`.
+    Sampler(u32, gdshader::check::types::SamplerKind, GdScalar),
 }
 
 /// Lowers the body of one function.
@@ -139,20 +141,31 @@ impl<'l, 'a> FnCtx<'l, 'a> {
                 })
         };
         assigned_names(&f.body.stmts, &is_out, &mut assigned);
-        for (i, (p, (ty, q))) in f.params.iter().zip(params).enumerate() {
+        let mut next_arg = 0u32;
+        for (p, (ty, q)) in f.params.iter().zip(params) {
             let sp = span(p.name.span);
+            let i = next_arg;
+            next_arg += if matches!(ty, GdType::Sampler(..)) {
+                2
+            } else {
+                1
+            };
+            if let GdType::Sampler(kind, scalar) = ty {
+                self.declare(&p.name.name, LocalSlot::Sampler(i, *kind, *scalar));
+                continue;
+            }
             if matches!(q, ParamQualifier::Out | ParamQualifier::InOut) {
-                self.declare(&p.name.name, LocalSlot::OutParam(i as u32));
+                self.declare(&p.name.name, LocalSlot::OutParam(i));
                 continue;
             }
             if !assigned.contains(p.name.name.as_str()) {
-                self.declare(&p.name.name, LocalSlot::Argument(i as u32));
+                self.declare(&p.name.name, LocalSlot::Argument(i));
                 continue;
             }
             let Some(th) = self.lw.ty(ty, p.ty.span) else {
                 continue;
             };
-            let arg = b.expr(E::FunctionArgument(i as u32), sp);
+            let arg = b.expr(E::FunctionArgument(i), sp);
             let local = b.local(Some(&p.name.name), th, sp);
             b.stmt(
                 Statement::Store {
@@ -182,6 +195,42 @@ impl<'l, 'a> FnCtx<'l, 'a> {
         let ptr = b.local(Some(&name.name), th, span(name.span));
         self.declare(&name.name, LocalSlot::Variable(ptr));
         Some(ptr)
+    }
+
+    /// A sampler expression (a sampler uniform, an element of a sampler array by a literal index,
+    /// or a sampler parameter) as its texture and sampler expressions, with its kind.
+    pub fn sampler(
+        &mut self,
+        b: &mut FnBuilder,
+        e: &Expr,
+    ) -> Option<(H, H, gdshader::check::types::SamplerKind, GdScalar)> {
+        let sp = span(e.span);
+        let name = match &e.kind {
+            ExprKind::Ident(id) => {
+                if let Some(LocalSlot::Sampler(i, kind, scalar)) = self
+                    .scopes
+                    .iter()
+                    .rev()
+                    .find_map(|s| s.get(&id.name))
+                    .cloned()
+                {
+                    let image = b.expr(E::FunctionArgument(i), sp);
+                    let sampler = b.expr(E::FunctionArgument(i + 1), sp);
+                    return Some((image, sampler, kind, scalar));
+                }
+                id.name.clone()
+            }
+            // An element of a sampler array, by a literal index: its own binding.
+            ExprKind::Index { base, index } => match (&base.kind, &index.kind) {
+                (ExprKind::Ident(id), ExprKind::IntLit(i)) => format!("{}_{i}", id.name),
+                _ => return None,
+            },
+            _ => return None,
+        };
+        let slot = self.lw.textures.get(&name).cloned()?;
+        let image = b.expr(E::GlobalVariable(slot.image), sp);
+        let sampler = b.expr(E::GlobalVariable(slot.sampler), sp);
+        Some((image, sampler, slot.kind, slot.scalar))
     }
 
     /// The naga type of a shader type.
@@ -449,6 +498,9 @@ impl<'l, 'a> FnCtx<'l, 'a> {
                 LocalSlot::Variable(ptr) => Val::Pointer(ptr),
                 LocalSlot::OutParam(i) => Val::Pointer(b.expr(E::FunctionArgument(i), sp)),
                 LocalSlot::Argument(i) => Val::Value(b.expr(E::FunctionArgument(i), sp)),
+                LocalSlot::Sampler(..) => {
+                    return self.unsupported(e, "a sampler used other than as the first argument of a texture function or a call");
+                }
             });
         }
         if let Some(c) = self.lw.constants.get(&id.name).cloned() {
@@ -980,6 +1032,16 @@ impl<'l, 'a> FnCtx<'l, 'a> {
                     }
                     arguments.push(tmp);
                     copy_out.push((place, tmp, a.span));
+                }
+                _ if matches!(ty, GdType::Sampler(..)) => {
+                    let Some((image, sampler, ..)) = self.sampler(b, a) else {
+                        return self.unsupported(
+                            a,
+                            "passing this sampler (a dynamically indexed sampler array)",
+                        );
+                    };
+                    arguments.push(image);
+                    arguments.push(sampler);
                 }
                 _ => arguments.push(self.value(b, a)?),
             }

@@ -526,14 +526,12 @@ impl<'a> Lowerer<'a> {
         );
     }
 
-    fn texture_at(
+    /// The naga texture and sampler types of a sampler of `kind` holding `scalar`s.
+    pub fn image_types(
         &mut self,
-        name: &str,
         kind: gdshader::check::types::SamplerKind,
         scalar: GdScalar,
-        group: u32,
-        binding: u32,
-    ) {
+    ) -> (Handle<Type>, Handle<Type>) {
         use gdshader::check::types::SamplerKind as K;
         let (dim, arrayed) = match kind {
             K::Tex2D => (naga::ImageDimension::D2, false),
@@ -542,27 +540,40 @@ impl<'a> Lowerer<'a> {
             K::Cube => (naga::ImageDimension::Cube, false),
             K::CubeArray => (naga::ImageDimension::Cube, true),
         };
-        let image_ty = self.module.types.insert(
+        let class = naga::ImageClass::Sampled {
+            kind: self::scalar(scalar).kind,
+            multi: false,
+        };
+        let image = self.module.types.insert(
             Type {
                 name: None,
                 inner: TypeInner::Image {
                     dim,
                     arrayed,
-                    class: naga::ImageClass::Sampled {
-                        kind: self::scalar(scalar).kind,
-                        multi: false,
-                    },
+                    class,
                 },
             },
             Span::UNDEFINED,
         );
-        let sampler_ty = self.module.types.insert(
+        let sampler = self.module.types.insert(
             Type {
                 name: None,
                 inner: TypeInner::Sampler { comparison: false },
             },
             Span::UNDEFINED,
         );
+        (image, sampler)
+    }
+
+    fn texture_at(
+        &mut self,
+        name: &str,
+        kind: gdshader::check::types::SamplerKind,
+        scalar: GdScalar,
+        group: u32,
+        binding: u32,
+    ) {
+        let (image_ty, sampler_ty) = self.image_types(kind, scalar);
         let global = |m: &mut Module, n: String, ty, b| {
             m.global_variables.append(
                 GlobalVariable {
@@ -716,6 +727,21 @@ impl<'a> Lowerer<'a> {
         }
         let mut b = FnBuilder::new(&f.name.name);
         for (p, (ty, q)) in f.params.iter().zip(&params) {
+            if let GdType::Sampler(kind, scalar) = ty {
+                // A sampler parameter is two arguments: the texture and its sampler.
+                let (image, sampler) = self.image_types(*kind, *scalar);
+                b.function.arguments.push(naga::FunctionArgument {
+                    name: Some(p.name.name.clone()),
+                    ty: image,
+                    binding: None,
+                });
+                b.function.arguments.push(naga::FunctionArgument {
+                    name: Some(format!("{}_sampler", p.name.name)),
+                    ty: sampler,
+                    binding: None,
+                });
+                continue;
+            }
             let Some(th) = self.ty(ty, p.ty.span) else {
                 return;
             };
