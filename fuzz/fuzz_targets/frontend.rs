@@ -1,4 +1,5 @@
-//! Feeds arbitrary bytes to the whole front end (UTF-8 check, preprocessor, parser, checker).
+//! Feeds arbitrary bytes to the whole front end (UTF-8 check, preprocessor, parser, checker),
+//! and lowers every shader it accepts to naga IR and validates it.
 //! Any panic is a bug: the front end must answer every input with diagnostics. Includes are
 //! served from memory so `#include` paths, depth limits and cycles are exercised too.
 #![no_main]
@@ -23,4 +24,11 @@ libfuzzer_sys::fuzz_target!(|data: &[u8]| {
     let output = gdshader::check_source("fuzz.gdshader", data.to_vec(), Some("fuzz.gdshader".into()), &mut SelfLoader(data));
     // E999 is what a caught panic in the front end turns into.
     assert!(output.diagnostics.iter().all(|d| d.code != "E999"));
+    // A shader the checker accepts must lower to a module naga accepts, or be refused as not
+    // translatable yet (E600); E601 would be a bug in the lowering.
+    if output.shader.is_some()
+        && let Err(diagnostics) = gdsky_naga::lower(&output)
+    {
+        assert!(diagnostics.iter().all(|d| d.code != gdsky_naga::INVALID_MODULE), "{:?}", diagnostics);
+    }
 });

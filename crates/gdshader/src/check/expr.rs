@@ -426,7 +426,8 @@ impl Checker {
         self.assignable(target)?;
         let result = match op {
             None => v.ty.clone(),
-            Some(op) => self.binary_type(op, &t.ty, &v.ty)?,
+            // No result type falls through to the mismatch report below.
+            Some(op) => self.binary_type(op, &t.ty, &v.ty).unwrap_or(Type::Void),
         };
         if result != t.ty {
             match op {
