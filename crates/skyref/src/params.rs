@@ -1,0 +1,185 @@
+//! The inputs shared by both precisions: the shader's uniforms ([`FreemanParams`]), Godot's
+//! built-ins as a scene ([`Scene`]) and the pixel → EYEDIR mapping ([`Projection`]).
+//!
+//! Everything here is `f64`; each precision module rounds these values to its own scalar type,
+//! as a host does when it fills the f32 uniform buffers of the converted shader.
+
+use glam::{DMat3, DVec3};
+
+/// The uniforms of `freeman_sky.gdshader`, one public field per `uniform`, with the shader's
+/// names and declaration order.
+///
+/// [`Default`] gives the shader's default values (checked against the fixture's text by a unit
+/// test). Values are stored as `f64` (float and vec3 uniforms) or `i32` (int uniforms) and
+/// rounded to the working precision by [`crate::f32`] / [`crate::f64`]. The shader's hint
+/// ranges are not enforced: any value is accepted, and the reference does what the shader's
+/// arithmetic does with it (which may be `inf` or `NaN`, never a panic).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FreemanParams {
+    /// Intensity of the sun (`sun_intensity`, default 62.832).
+    pub sun_intensity: f64,
+    /// Wavelengths, in micrometres, that the Rayleigh coefficient uses for R, G, B
+    /// (`sun_wavelengths`, default (0.680, 0.550, 0.480)).
+    pub sun_wavelengths: DVec3,
+    /// Rayleigh scale height in metres (`rayleigh_scale_height`, default 8000).
+    pub rayleigh_scale_height: f64,
+    /// Strength of the isotropic Rayleigh multi-scattering term
+    /// (`rayleigh_multi_scattering`, default 0.01).
+    pub rayleigh_multi_scattering: f64,
+    /// Mie scale height in metres (`mie_scale_height`, default 1200).
+    pub mie_scale_height: f64,
+    /// Mie scattering coefficient per metre (`mie_scattering`, default 5e-6).
+    pub mie_scattering: f64,
+    /// Mie single-scattering albedo (`mie_albedo`, default 0.9).
+    pub mie_albedo: f64,
+    /// Forward lobe of the double Henyey-Greenstein Mie phase (`mie_g_forward`, default 0.85).
+    pub mie_g_forward: f64,
+    /// Backward lobe of the Mie phase (`mie_g_backward`, default -0.15).
+    pub mie_g_backward: f64,
+    /// Weight of the forward lobe (`mie_weight`, default 0.85).
+    pub mie_weight: f64,
+    /// Strength of the Mie multi-scattering lobe (`mie_multi_scattering`, default 0.30).
+    pub mie_multi_scattering: f64,
+    /// Forward lobe of the multi-scattering Mie phase (`multiscattering_mie_g_forward`,
+    /// default 0.5).
+    pub multiscattering_mie_g_forward: f64,
+    /// Backward lobe of the multi-scattering Mie phase (`multiscattering_mie_g_backward`,
+    /// default -0.05).
+    pub multiscattering_mie_g_backward: f64,
+    /// Weight of the multi-scattering forward lobe (`multiscattering_mie_weight`,
+    /// default 0.75).
+    pub multiscattering_mie_weight: f64,
+    /// Altitude of the centre of the ozone layer in metres (`ozone_center`, default 25000).
+    pub ozone_center: f64,
+    /// Width of the ozone layer in metres (`ozone_width`, default 30000).
+    pub ozone_width: f64,
+    /// Planet radius in metres (`planet_radius`, default 6360000).
+    pub planet_radius: f64,
+    /// Atmosphere thickness in metres (`atmosphere_height`, default 100000).
+    pub atmosphere_height: f64,
+    /// Altitude of the camera when `POSITION.y` is 0, in metres (`base_altitude`, default 0).
+    pub base_altitude: f64,
+    /// Albedo of the ground (`ground_color`, default (0.12, 0.11, 0.08)).
+    pub ground_color: DVec3,
+    /// Samples along the view ray (`view_samples`, default 24; halved for rays that hit the
+    /// ground).
+    pub view_samples: i32,
+    /// Samples along each path toward the sun (`sun_samples`, default 8).
+    pub sun_samples: i32,
+}
+
+impl Default for FreemanParams {
+    fn default() -> Self {
+        Self {
+            sun_intensity: 62.832,
+            sun_wavelengths: DVec3::new(0.680, 0.550, 0.480),
+            rayleigh_scale_height: 8000.0,
+            rayleigh_multi_scattering: 0.01,
+            mie_scale_height: 1200.0,
+            mie_scattering: 5e-6,
+            mie_albedo: 0.9,
+            mie_g_forward: 0.85,
+            mie_g_backward: -0.15,
+            mie_weight: 0.85,
+            mie_multi_scattering: 0.30,
+            multiscattering_mie_g_forward: 0.5,
+            multiscattering_mie_g_backward: -0.05,
+            multiscattering_mie_weight: 0.75,
+            ozone_center: 25000.0,
+            ozone_width: 30000.0,
+            planet_radius: 6360000.0,
+            atmosphere_height: 100000.0,
+            base_altitude: 0.0,
+            ground_color: DVec3::new(0.12, 0.11, 0.08),
+            view_samples: 24,
+            sun_samples: 8,
+        }
+    }
+}
+
+impl FreemanParams {
+    /// The same parameters with other sample counts (`view_samples`, `sun_samples`).
+    #[must_use]
+    pub fn with_samples(self, view_samples: i32, sun_samples: i32) -> Self {
+        Self {
+            view_samples,
+            sun_samples,
+            ..self
+        }
+    }
+}
+
+/// Godot's built-ins that the Freeman sky reads, plus the camera used by
+/// [`Projection::Camera`].
+///
+/// The conventions are Godot's (see the workspace's design notes): the sun is given by
+/// elevation and azimuth in degrees, the camera by a vertical field of view, a yaw and a pitch.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Scene {
+    /// Sun elevation above the horizon, in degrees (90 is the zenith).
+    pub sun_elevation_deg: f64,
+    /// Sun azimuth in degrees: 0 toward −Z, 90 toward +X.
+    pub sun_azimuth_deg: f64,
+    /// `LIGHT0_ENABLED`: with no light the Freeman sky is black.
+    pub light_enabled: bool,
+    /// Camera `POSITION` in metres. Only `.y` matters to the Freeman sky.
+    pub position: DVec3,
+    /// Vertical field of view of the camera projection, in degrees (default 90).
+    pub fov_deg: f64,
+    /// Camera yaw in degrees (rotation about +Y; 90 turns the view from −Z to −X).
+    pub yaw_deg: f64,
+    /// Camera pitch in degrees (rotation about +X; 90 looks straight up).
+    pub pitch_deg: f64,
+}
+
+impl Default for Scene {
+    /// Sun at 10° elevation toward −Z, light on, camera at the origin looking toward −Z with a
+    /// 90° vertical field of view.
+    fn default() -> Self {
+        Self {
+            sun_elevation_deg: 10.0,
+            sun_azimuth_deg: 0.0,
+            light_enabled: true,
+            position: DVec3::ZERO,
+            fov_deg: 90.0,
+            yaw_deg: 0.0,
+            pitch_deg: 0.0,
+        }
+    }
+}
+
+impl Scene {
+    /// `LIGHT0_DIRECTION`, the unit vector toward the sun:
+    /// (cos e · sin a, sin e, −cos e · cos a).
+    pub fn light0_direction(&self) -> DVec3 {
+        let (se, ce) = self.sun_elevation_deg.to_radians().sin_cos();
+        let (sa, ca) = self.sun_azimuth_deg.to_radians().sin_cos();
+        DVec3::new(ce * sa, se, -ce * ca)
+    }
+
+    /// The camera basis, Godot's Euler YXZ with no roll: R_y(yaw) · R_x(pitch). Its columns are
+    /// the camera's right, up and back (+Z) axes in world space.
+    pub fn camera_basis(&self) -> DMat3 {
+        DMat3::from_rotation_y(self.yaw_deg.to_radians())
+            * DMat3::from_rotation_x(self.pitch_deg.to_radians())
+    }
+
+    /// tan(fov / 2) for the vertical field of view (`tan_half_fov` of the converted shader's
+    /// built-ins).
+    pub fn tan_half_fov(&self) -> f64 {
+        (self.fov_deg.to_radians() * 0.5).tan()
+    }
+}
+
+/// How pixel (x, y) of a W×H image becomes EYEDIR, exactly as the converted shader's fragment
+/// entries do it (pixel centres u = (x+½)/W, v = (y+½)/H, row 0 at the top).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+pub enum Projection {
+    /// `fs_panorama`, the inverse of SKY_COORDS: φ = 2πu, θ = πv,
+    /// EYEDIR = (sin θ sin φ, cos θ, −sin θ cos φ) (not renormalised).
+    #[default]
+    Panorama,
+    /// `fs_camera`: EYEDIR = normalize(basis · ((2u−1)·t·W/H, (1−2v)·t, −1)) with
+    /// t = tan(fov/2) and the basis of [`Scene::camera_basis`].
+    Camera,
+}
