@@ -23,28 +23,18 @@ fn expected_line(path: &Path) -> usize {
         return 1;
     }
     let text = String::from_utf8_lossy(&bytes);
-    let at = text
-        .find("// expect: ")
-        .unwrap_or_else(|| panic!("{} has no `// expect:` line", path.display()));
+    let at = text.find("// expect: ").unwrap_or_else(|| panic!("{} has no `// expect:` line", path.display()));
     let rest = &text[at + "// expect: ".len()..];
     let line = rest.split(':').next().unwrap_or("");
-    line.trim()
-        .parse()
-        .unwrap_or_else(|_| panic!("{}: bad expect line", path.display()))
+    line.trim().parse().unwrap_or_else(|_| panic!("{}: bad expect line", path.display()))
 }
 
 /// The file an invalid shader's error is reported in: the shader itself, or the include named
 /// by `(in PATH)` on its expect line.
 fn expected_file(path: &Path) -> String {
     let text = String::from_utf8_lossy(&std::fs::read(path).expect("readable")).into_owned();
-    let expect = text
-        .lines()
-        .find(|l| l.contains("// expect: "))
-        .unwrap_or("");
-    match expect
-        .split_once("(in ")
-        .and_then(|(_, rest)| rest.split_once(')'))
-    {
+    let expect = text.lines().find(|l| l.contains("// expect: ")).unwrap_or("");
+    match expect.split_once("(in ").and_then(|(_, rest)| rest.split_once(')')) {
         Some((include, _)) => include.to_string(),
         None => relative(path).display().to_string(),
     }
@@ -77,12 +67,7 @@ fn invalid_shaders_fail_where_expected() {
         }
         insta::assert_snapshot!(rendered);
     });
-    assert!(
-        wrong.is_empty(),
-        "{} invalid shaders misreported:\n{}",
-        wrong.len(),
-        wrong.join("\n")
-    );
+    assert!(wrong.is_empty(), "{} invalid shaders misreported:\n{}", wrong.len(), wrong.join("\n"));
 }
 
 #[test]
@@ -102,13 +87,8 @@ fn valid_shaders_are_accepted() {
 
 #[test]
 fn freeman_sky_uniforms_as_the_checker_sees_them() {
-    let output =
-        gdsky::check_file(Path::new("fixtures/freeman_sky.gdshader")).expect("fixture is readable");
-    assert!(
-        output.diagnostics.is_empty(),
-        "{}",
-        render_human(&output.db, &output.diagnostics, false)
-    );
+    let output = gdsky::check_file(Path::new("fixtures/freeman_sky.gdshader")).expect("fixture is readable");
+    assert!(output.diagnostics.is_empty(), "{}", render_human(&output.db, &output.diagnostics, false));
     let shader = output.shader.expect("valid");
     // Every `uniform` declaration of the fixture starts a line; count them independently.
     let text = std::fs::read_to_string("fixtures/freeman_sky.gdshader").expect("readable");
@@ -138,46 +118,23 @@ fn gdsky() -> Command {
 
 #[test]
 fn check_exit_codes_follow_the_cli_contract() {
-    let ok = gdsky()
-        .args(["check", "fixtures/freeman_sky.gdshader"])
-        .output()
-        .expect("runs");
-    assert_eq!(
-        ok.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&ok.stderr)
-    );
+    let ok = gdsky().args(["check", "fixtures/freeman_sky.gdshader"]).output().expect("runs");
+    assert_eq!(ok.status.code(), Some(0), "{}", String::from_utf8_lossy(&ok.stderr));
     let bad = gdsky()
-        .args([
-            "check",
-            "fixtures/freeman_sky.gdshader",
-            "tests/shaders/invalid/missing_semicolon.gdshader",
-        ])
+        .args(["check", "fixtures/freeman_sky.gdshader", "tests/shaders/invalid/missing_semicolon.gdshader"])
         .output()
         .expect("runs");
     assert_eq!(bad.status.code(), Some(1));
     let stderr = String::from_utf8_lossy(&bad.stderr);
-    assert!(
-        stderr.contains("tests/shaders/invalid/missing_semicolon.gdshader:"),
-        "{stderr}"
-    );
-    let missing = gdsky()
-        .args(["check", "tests/shaders/no_such_file.gdshader"])
-        .output()
-        .expect("runs");
+    assert!(stderr.contains("tests/shaders/invalid/missing_semicolon.gdshader:"), "{stderr}");
+    let missing = gdsky().args(["check", "tests/shaders/no_such_file.gdshader"]).output().expect("runs");
     assert_eq!(missing.status.code(), Some(2));
 }
 
 #[test]
 fn json_diagnostics_have_the_contract_fields() {
     let out = gdsky()
-        .args([
-            "check",
-            "--diagnostics",
-            "json",
-            "tests/shaders/invalid/int_plus_float.gdshader",
-        ])
+        .args(["check", "--diagnostics", "json", "tests/shaders/invalid/int_plus_float.gdshader"])
         .output()
         .expect("runs");
     assert_eq!(out.status.code(), Some(1));
@@ -186,27 +143,14 @@ fn json_diagnostics_have_the_contract_fields() {
     assert!(!lines.is_empty());
     for line in lines {
         let v: serde_json::Value = serde_json::from_str(line).expect("each line is JSON");
-        for key in [
-            "file",
-            "line",
-            "column",
-            "end_line",
-            "end_column",
-            "severity",
-            "code",
-            "message",
-        ] {
+        for key in ["file", "line", "column", "end_line", "end_column", "severity", "code", "message"] {
             assert!(v.get(key).is_some(), "{key} missing from {line}");
         }
         assert_eq!(v["file"], "tests/shaders/invalid/int_plus_float.gdshader");
-        assert_eq!(
-            v["line"],
-            expected_line(Path::new("tests/shaders/invalid/int_plus_float.gdshader"))
-        );
+        assert_eq!(v["line"], expected_line(Path::new("tests/shaders/invalid/int_plus_float.gdshader")));
     }
     // The library's JSON and the binary's agree.
-    let output = gdsky::check_file(Path::new("tests/shaders/invalid/int_plus_float.gdshader"))
-        .expect("readable");
+    let output = gdsky::check_file(Path::new("tests/shaders/invalid/int_plus_float.gdshader")).expect("readable");
     assert_eq!(render_json(&output.db, &output.diagnostics), stdout);
 }
 
@@ -217,22 +161,13 @@ fn hostile_inputs_get_a_diagnostic_and_exit_1() {
     let cases: Vec<(&str, Vec<u8>, &str)> = vec![
         (
             "parens",
-            format!(
-                "shader_type sky; void sky() {{ COLOR = vec3({}1.0{}); }}",
-                "(".repeat(20_000),
-                ")".repeat(20_000)
-            )
-            .into_bytes(),
+            format!("shader_type sky; void sky() {{ COLOR = vec3({}1.0{}); }}", "(".repeat(20_000), ")".repeat(20_000))
+                .into_bytes(),
             "E500",
         ),
         (
             "blocks",
-            format!(
-                "shader_type sky; void sky() {}{}",
-                "{".repeat(20_000),
-                "}".repeat(20_000)
-            )
-            .into_bytes(),
+            format!("shader_type sky; void sky() {}{}", "{".repeat(20_000), "}".repeat(20_000)).into_bytes(),
             "E500",
         ),
         (
@@ -249,31 +184,15 @@ fn hostile_inputs_get_a_diagnostic_and_exit_1() {
         ),
         ("nul", b"shader_type sky;\0void sky() {}".to_vec(), "E002"),
         ("utf8", b"shader_type sky;\n\xff\xfe".to_vec(), "E001"),
-        (
-            "array",
-            b"shader_type sky; void sky() { float a[2000000000]; }".to_vec(),
-            "E501",
-        ),
+        ("array", b"shader_type sky; void sky() { float a[2000000000]; }".to_vec(), "E501"),
     ];
     for (name, bytes, code) in cases {
         let path = dir.join(format!("{name}.gdshader"));
         std::fs::write(&path, bytes).expect("write");
-        let out = gdsky()
-            .args(["check", "--diagnostics", "json"])
-            .arg(&path)
-            .output()
-            .expect("runs");
-        assert_eq!(
-            out.status.code(),
-            Some(1),
-            "{name}: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        let out = gdsky().args(["check", "--diagnostics", "json"]).arg(&path).output().expect("runs");
+        assert_eq!(out.status.code(), Some(1), "{name}: {}", String::from_utf8_lossy(&out.stderr));
         let stdout = String::from_utf8_lossy(&out.stdout);
-        assert!(
-            stdout.contains(&format!("\"code\":\"{code}\"")),
-            "{name}: {stdout}"
-        );
+        assert!(stdout.contains(&format!("\"code\":\"{code}\"")), "{name}: {stdout}");
     }
     let _ = std::fs::remove_dir_all(&dir);
 }

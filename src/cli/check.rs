@@ -57,16 +57,8 @@ pub fn run(args: &CheckArgs) -> ExitCode {
                 eprint!("{}", render_human(&output.db, &output.diagnostics, color));
                 let errors = output.diagnostics.iter().filter(|d| d.is_error()).count();
                 let warnings = output.diagnostics.len() - errors;
-                let verdict = if errors > 0 {
-                    format!("{errors} error(s)")
-                } else {
-                    "ok".to_string()
-                };
-                let extra = if warnings > 0 {
-                    format!(", {warnings} warning(s)")
-                } else {
-                    String::new()
-                };
+                let verdict = if errors > 0 { format!("{errors} error(s)") } else { "ok".to_string() };
+                let extra = if warnings > 0 { format!(", {warnings} warning(s)") } else { String::new() };
                 let _ = writeln!(stdout, "{}: {verdict}{extra}", path.display());
             }
             DiagnosticsFormat::Json => {

@@ -49,31 +49,18 @@ pub fn run(args: &ConvertArgs) -> ExitCode {
             return ExitCode::from(1);
         }
     };
-    let stem = args
-        .file
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "shader".into());
+    let stem = args.file.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "shader".into());
     let wgsl = match gdsky_naga::to_wgsl(&lowered) {
         Ok(w) => w,
         Err(err) => {
-            eprintln!(
-                "error[{}]: naga's WGSL writer failed: {err}",
-                gdsky_naga::BACKEND
-            );
+            eprintln!("error[{}]: naga's WGSL writer failed: {err}", gdsky_naga::BACKEND);
             return ExitCode::from(1);
         }
     };
     let spirv = match gdsky_naga::to_spirv(&lowered) {
-        Ok(words) => words
-            .iter()
-            .flat_map(|w| w.to_le_bytes())
-            .collect::<Vec<u8>>(),
+        Ok(words) => words.iter().flat_map(|w| w.to_le_bytes()).collect::<Vec<u8>>(),
         Err(err) => {
-            eprintln!(
-                "error[{}]: naga's SPIR-V writer failed: {err}",
-                gdsky_naga::BACKEND
-            );
+            eprintln!("error[{}]: naga's SPIR-V writer failed: {err}", gdsky_naga::BACKEND);
             return ExitCode::from(1);
         }
     };
@@ -89,11 +76,7 @@ pub fn run(args: &ConvertArgs) -> ExitCode {
         eprintln!("error: cannot create {}: {err}", args.out_dir.display());
         return ExitCode::from(2);
     }
-    for (ext, bytes) in [
-        ("wgsl", wgsl.as_bytes()),
-        ("spv", spirv.as_slice()),
-        ("json", json.as_bytes()),
-    ] {
+    for (ext, bytes) in [("wgsl", wgsl.as_bytes()), ("spv", spirv.as_slice()), ("json", json.as_bytes())] {
         let path = args.out_dir.join(format!("{stem}.{ext}"));
         if let Err(err) = super::write_atomically(&path, bytes) {
             eprintln!("error: cannot write {}: {err}", path.display());

@@ -12,10 +12,7 @@ struct NoIncludes;
 
 impl preprocess::Loader for NoIncludes {
     fn load(&mut self, path: &std::path::Path) -> std::io::Result<Vec<u8>> {
-        Err(std::io::Error::new(
-            std::io::ErrorKind::NotFound,
-            path.display().to_string(),
-        ))
+        Err(std::io::Error::new(std::io::ErrorKind::NotFound, path.display().to_string()))
     }
 }
 
@@ -40,21 +37,13 @@ fn preprocess_and_parse(text: &str) -> parse::ast::Shader {
 
 fn frontend(c: &mut Criterion) {
     let mut group = c.benchmark_group("freeman_sky");
-    group.bench_function("preprocess", |b| {
-        b.iter(|| preprocess_only(black_box(FREEMAN)))
-    });
+    group.bench_function("preprocess", |b| b.iter(|| preprocess_only(black_box(FREEMAN))));
     let text = preprocess_only(FREEMAN).text;
     group.bench_function("parse", |b| b.iter(|| parse::parse(black_box(&text))));
-    group.bench_function("preprocess+parse", |b| {
-        b.iter(|| preprocess_and_parse(black_box(FREEMAN)))
-    });
+    group.bench_function("preprocess+parse", |b| b.iter(|| preprocess_and_parse(black_box(FREEMAN))));
     let ast = preprocess_and_parse(FREEMAN);
     group.bench_function("check", |b| {
-        b.iter_batched(
-            || ast.clone(),
-            |ast| gdshader::check::check(black_box(ast)),
-            criterion::BatchSize::SmallInput,
-        )
+        b.iter_batched(|| ast.clone(), |ast| gdshader::check::check(black_box(ast)), criterion::BatchSize::SmallInput)
     });
     group.bench_function("all (check_source)", |b| {
         b.iter(|| {

@@ -81,10 +81,7 @@ pub struct FrontendOutput {
 impl FrontendOutput {
     /// The file and byte range a span of the checked shader stands for.
     pub fn locate(&self, span: parse::ast::Span) -> (FileId, std::ops::Range<usize>) {
-        self.preprocessed
-            .map
-            .locate(span.range())
-            .unwrap_or((self.root, 0..0))
+        self.preprocessed.map.locate(span.range()).unwrap_or((self.root, 0..0))
     }
 
     /// True when any diagnostic is an error.
@@ -96,12 +93,7 @@ impl FrontendOutput {
 /// Reads and checks the shader at `path`, reading includes from disk.
 pub fn check_file(path: &Path) -> std::io::Result<FrontendOutput> {
     let bytes = std::fs::read(path)?;
-    Ok(check_source(
-        &path.display().to_string(),
-        bytes,
-        Some(path.to_path_buf()),
-        &mut FsLoader,
-    ))
+    Ok(check_source(&path.display().to_string(), bytes, Some(path.to_path_buf()), &mut FsLoader))
 }
 
 /// Checks shader source `bytes` named `name` (a display name; `path`, when given, is where
@@ -132,21 +124,10 @@ fn internal_error(name: &str) -> FrontendOutput {
             .with_primary(root, 0..0, "")
             .with_note("this is a bug in gdsky; please report it with the shader that caused it"),
     ];
-    FrontendOutput {
-        db,
-        root,
-        diagnostics,
-        shader: None,
-        preprocessed: preprocess::Preprocessed::default(),
-    }
+    FrontendOutput { db, root, diagnostics, shader: None, preprocessed: preprocess::Preprocessed::default() }
 }
 
-fn run(
-    name: &str,
-    bytes: Vec<u8>,
-    path: Option<PathBuf>,
-    loader: &mut dyn Loader,
-) -> FrontendOutput {
+fn run(name: &str, bytes: Vec<u8>, path: Option<PathBuf>, loader: &mut dyn Loader) -> FrontendOutput {
     let mut db = SourceDb::new();
     let mut diagnostics = Vec::new();
     let text = match String::from_utf8(bytes) {
@@ -172,13 +153,7 @@ fn run(
     let root = db.add(name, text, path);
     let pre = preprocess::preprocess(&mut db, root, loader, &mut diagnostics);
     let shader = parse_and_check(&pre, root, &mut diagnostics);
-    FrontendOutput {
-        db,
-        root,
-        diagnostics,
-        shader,
-        preprocessed: pre,
-    }
+    FrontendOutput { db, root, diagnostics, shader, preprocessed: pre }
 }
 
 /// Parses and checks preprocessed text; `None` when there were errors.
@@ -208,23 +183,12 @@ fn locate(d: SpannedDiagnostic, map: &SourceMap, root: FileId) -> Diagnostic {
     let place = |span: parse::ast::Span| map.locate(span.range()).unwrap_or((root, 0..0));
     let (file, range) = place(d.primary.0);
     if map.in_expansion(d.primary.0.start as usize) {
-        out.notes
-            .push("the problem is in the text this macro invocation expands to".into());
+        out.notes.push("the problem is in the text this macro invocation expands to".into());
     }
-    out.labels.push(Label {
-        file,
-        range,
-        message: d.primary.1,
-        primary: true,
-    });
+    out.labels.push(Label { file, range, message: d.primary.1, primary: true });
     for (span, message) in d.secondary {
         let (file, range) = place(span);
-        out.labels.push(Label {
-            file,
-            range,
-            message,
-            primary: false,
-        });
+        out.labels.push(Label { file, range, message, primary: false });
     }
     out
 }

@@ -65,10 +65,7 @@ pub fn lower(front: &FrontendOutput) -> Result<Lowered, Vec<Diagnostic>> {
 
 /// Like [`lower`], with uniforms baked into constants: `baked` maps a uniform's name to the text
 /// of its value (`1.5`, `24`, `true`, `0.1,0.2,0.3`), as `gdsky convert --set` takes it.
-pub fn lower_with(
-    front: &FrontendOutput,
-    baked: &HashMap<String, String>,
-) -> Result<Lowered, Vec<Diagnostic>> {
+pub fn lower_with(front: &FrontendOutput, baked: &HashMap<String, String>) -> Result<Lowered, Vec<Diagnostic>> {
     let Some(shader) = front.shader.as_ref() else {
         return Err(front.diagnostics.clone());
     };
@@ -78,11 +75,8 @@ pub fn lower_with(
         let Some(u) = shader.uniforms.iter().find(|u| &u.name == name) else {
             let known: Vec<&str> = shader.uniforms.iter().map(|u| u.name.as_str()).collect();
             errors.push(
-                Diagnostic::error(
-                    BAD_SET,
-                    format!("`--set {name}=…`: the shader has no uniform `{name}`"),
-                )
-                .with_note(format!("its uniforms are: {}", known.join(", "))),
+                Diagnostic::error(BAD_SET, format!("`--set {name}=…`: the shader has no uniform `{name}`"))
+                    .with_note(format!("its uniforms are: {}", known.join(", "))),
             );
             continue;
         };
@@ -116,21 +110,13 @@ pub fn lower_with(
     let textures = lw.textures;
     let module = lw.module;
     let info = validate(front, &module).map_err(|d| vec![d])?;
-    Ok(Lowered {
-        module,
-        info,
-        uniforms,
-        material_size,
-        textures,
-    })
+    Ok(Lowered { module, info, uniforms, material_size, textures })
 }
 
 /// Validates a module lowered from `front` with naga; an error comes back as a diagnostic at
 /// the shader's own lines (every expression's span points into the shader).
 pub fn validate(front: &FrontendOutput, module: &naga::Module) -> Result<ModuleInfo, Diagnostic> {
-    validator()
-        .validate(module)
-        .map_err(|err| validation_diagnostic(front, &err))
+    validator().validate(module).map_err(|err| validation_diagnostic(front, &err))
 }
 
 /// The validator gdsky uses: everything checked except uniformity of control flow, since GLSL
@@ -145,64 +131,39 @@ pub fn validator() -> Validator {
 }
 
 /// A naga validation error as a diagnostic at the shader's own lines.
-fn validation_diagnostic(
-    front: &FrontendOutput,
-    err: &naga::WithSpan<naga::valid::ValidationError>,
-) -> Diagnostic {
+fn validation_diagnostic(front: &FrontendOutput, err: &naga::WithSpan<naga::valid::ValidationError>) -> Diagnostic {
     let mut chain = Vec::new();
     let mut source: Option<&dyn std::error::Error> = std::error::Error::source(err.as_inner());
     while let Some(s) = source {
         chain.push(s.to_string());
         source = s.source();
     }
-    let mut d = Diagnostic::error(
-        INVALID_MODULE,
-        format!("naga rejected the translated shader: {}", err.as_inner()),
-    )
-    .with_note("this is a bug in gdsky's translation, not in the shader; please report it")
-    .with_notes(chain);
+    let mut d = Diagnostic::error(INVALID_MODULE, format!("naga rejected the translated shader: {}", err.as_inner()))
+        .with_note("this is a bug in gdsky's translation, not in the shader; please report it")
+        .with_notes(chain);
     // naga lists spans from the outer context (the function) to the innermost culprit; the
     // innermost is where the user should look.
-    let spans: Vec<_> = err
-        .spans()
-        .filter_map(|(span, label)| span.to_range().map(|r| (r, label.clone())))
-        .collect();
+    let spans: Vec<_> = err.spans().filter_map(|(span, label)| span.to_range().map(|r| (r, label.clone()))).collect();
     let labelled = !spans.is_empty();
     let last = spans.len().saturating_sub(1);
     for (i, (range, label)) in spans.into_iter().enumerate() {
         let (file, range) = front.locate(ast::Span::new(range.start, range.end));
-        d.labels.push(gdshader::Label {
-            file,
-            range,
-            message: label,
-            primary: i == last,
-        });
+        d.labels.push(gdshader::Label { file, range, message: label, primary: i == last });
     }
     if !labelled {
-        d.notes.push(
-            "the problem is in code gdsky's sky wrapper adds, which has no place in the shader"
-                .into(),
-        );
+        d.notes.push("the problem is in code gdsky's sky wrapper adds, which has no place in the shader".into());
     }
     d
 }
 
 /// Writes the module as WGSL.
 pub fn to_wgsl(lowered: &Lowered) -> Result<String, naga::back::wgsl::Error> {
-    naga::back::wgsl::write_string(
-        &lowered.module,
-        &lowered.info,
-        naga::back::wgsl::WriterFlags::empty(),
-    )
+    naga::back::wgsl::write_string(&lowered.module, &lowered.info, naga::back::wgsl::WriterFlags::empty())
 }
 
 /// Writes the module as SPIR-V 1.3 for Vulkan, every entry point in one module. The vertex
 /// position is written in Vulkan's clip space as wgpu expects (naga's default adjustment).
 pub fn to_spirv(lowered: &Lowered) -> Result<Vec<u32>, naga::back::spv::Error> {
-    let options = naga::back::spv::Options {
-        lang_version: (1, 3),
-        fake_missing_bindings: true,
-        ..Default::default()
-    };
+    let options = naga::back::spv::Options { lang_version: (1, 3), fake_missing_bindings: true, ..Default::default() };
     naga::back::spv::write_vec(&lowered.module, &lowered.info, &options, None)
 }

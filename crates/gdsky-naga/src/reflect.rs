@@ -19,14 +19,10 @@ pub fn parse_value(ty: &Type, text: &str) -> Result<ConstValue, String> {
     let scalar = |s: Scalar, t: &str| -> Result<ConstValue, String> {
         let t = t.trim();
         match s {
-            Scalar::Float => t
-                .parse::<f64>()
-                .map(ConstValue::Float)
-                .map_err(|_| format!("`{t}` is not a number")),
-            Scalar::Int => t
-                .parse::<i32>()
-                .map(|v| ConstValue::Int(i64::from(v)))
-                .map_err(|_| format!("`{t}` is not an int")),
+            Scalar::Float => t.parse::<f64>().map(ConstValue::Float).map_err(|_| format!("`{t}` is not a number")),
+            Scalar::Int => {
+                t.parse::<i32>().map(|v| ConstValue::Int(i64::from(v))).map_err(|_| format!("`{t}` is not an int"))
+            }
             Scalar::UInt => t
                 .trim_end_matches('u')
                 .parse::<u32>()
@@ -44,16 +40,9 @@ pub fn parse_value(ty: &Type, text: &str) -> Result<ConstValue, String> {
         Type::Vector(s, n) => {
             let parts: Vec<&str> = text.split(',').collect();
             if parts.len() != usize::from(*n) {
-                return Err(format!(
-                    "expected {n} comma-separated components, got {}",
-                    parts.len()
-                ));
+                return Err(format!("expected {n} comma-separated components, got {}", parts.len()));
             }
-            parts
-                .iter()
-                .map(|p| scalar(*s, p))
-                .collect::<Result<Vec<_>, _>>()
-                .map(ConstValue::Composite)
+            parts.iter().map(|p| scalar(*s, p)).collect::<Result<Vec<_>, _>>().map(ConstValue::Composite)
         }
         _ => Err("only scalar and vector uniforms can be set".into()),
     }
@@ -71,12 +60,7 @@ fn value_json(v: &ConstValue) -> Value {
 
 /// The reflection of a converted shader. `baked` lists the uniforms `--set` turned into
 /// constants, with their values.
-pub fn reflection(
-    name: &str,
-    shader: &CheckedShader,
-    lowered: &Lowered,
-    baked: &HashMap<String, String>,
-) -> Value {
+pub fn reflection(name: &str, shader: &CheckedShader, lowered: &Lowered, baked: &HashMap<String, String>) -> Value {
     let structs = shader.struct_names();
     let uniforms: Vec<Value> = shader
         .uniforms
@@ -141,11 +125,7 @@ pub fn reflection(
     if shader.render_modes.iter().any(|m| m == "use_half_res_pass") {
         passes.push("half");
     }
-    if shader
-        .render_modes
-        .iter()
-        .any(|m| m == "use_quarter_res_pass")
-    {
+    if shader.render_modes.iter().any(|m| m == "use_quarter_res_pass") {
         passes.push("quarter");
     }
     // Godot's AUTOMATIC process mode (reference §2), for a radiance size of 256.

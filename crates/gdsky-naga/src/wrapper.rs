@@ -17,9 +17,9 @@ use crate::lower::{FnBuilder, Lowerer, Val, span};
 use gdshader::check::types::Type as GdType;
 use gdshader::parse::ast;
 use naga::{
-    AddressSpace, BinaryOperator as Bo, Binding, BuiltIn, EntryPoint, Expression as E,
-    FunctionArgument, FunctionResult, GlobalVariable, Handle, Literal, MathFunction as Mf,
-    MemoryDecorations, ResourceBinding, ShaderStage, Span, Statement, Type, TypeInner, VectorSize,
+    AddressSpace, BinaryOperator as Bo, Binding, BuiltIn, EntryPoint, Expression as E, FunctionArgument,
+    FunctionResult, GlobalVariable, Handle, Literal, MathFunction as Mf, MemoryDecorations, ResourceBinding,
+    ShaderStage, Span, Statement, Type, TypeInner, VectorSize,
 };
 use std::collections::HashMap;
 use std::f64::consts::PI;
@@ -85,14 +85,8 @@ impl Builtins {
         let (Some(f32t), Some(u32t), Some(v2), Some(v3), Some(m3)) = (
             lw.ty(&f, ast::Span::default()),
             lw.ty(&GdType::UINT, ast::Span::default()),
-            lw.ty(
-                &GdType::Vector(gdshader::check::types::Scalar::Float, 2),
-                ast::Span::default(),
-            ),
-            lw.ty(
-                &GdType::Vector(gdshader::check::types::Scalar::Float, 3),
-                ast::Span::default(),
-            ),
+            lw.ty(&GdType::Vector(gdshader::check::types::Scalar::Float, 2), ast::Span::default()),
+            lw.ty(&GdType::Vector(gdshader::check::types::Scalar::Float, 3), ast::Span::default()),
             lw.ty(&GdType::Matrix(3), ast::Span::default()),
         ) else {
             return;
@@ -110,20 +104,13 @@ impl Builtins {
         );
         let lights = lw.uniform_array(light, 4);
         let fields = [m3, v3, f32t, v2, f32t, u32t, f32t, u32t, lights];
-        let members: Vec<(String, Handle<Type>)> = BUILTIN_FIELDS
-            .iter()
-            .map(|n| n.to_string())
-            .zip(fields)
-            .collect();
+        let members: Vec<(String, Handle<Type>)> = BUILTIN_FIELDS.iter().map(|n| n.to_string()).zip(fields).collect();
         let ty = lw.struct_type("SkyBuiltins", &members, true);
         let global = lw.module.global_variables.append(
             GlobalVariable {
                 name: Some("sky_builtins".into()),
                 space: AddressSpace::Uniform,
-                binding: Some(ResourceBinding {
-                    group: 0,
-                    binding: 0,
-                }),
+                binding: Some(ResourceBinding { group: 0, binding: 0 }),
                 ty,
                 init: None,
                 memory_decorations: MemoryDecorations::empty(),
@@ -135,8 +122,7 @@ impl Builtins {
             if !lw.shader.builtins_used.contains(name) {
                 continue;
             }
-            let Some(ty) = GdType::from_name(ty_name).and_then(|t| lw.ty(&t, ast::Span::default()))
-            else {
+            let Some(ty) = GdType::from_name(ty_name).and_then(|t| lw.ty(&t, ast::Span::default())) else {
                 continue;
             };
             let g = lw.module.global_variables.append(
@@ -167,32 +153,12 @@ pub const SKY_TEXTURE_GROUP: u32 = 2;
 /// The sky's own textures: the built-in that needs it, the texture's global name, dimension,
 /// and texture binding (its sampler is the next binding).
 pub const SKY_TEXTURES: [(&str, &str, gdshader::check::types::SamplerKind, u32); 3] = [
-    (
-        "RADIANCE",
-        "RADIANCE",
-        gdshader::check::types::SamplerKind::Cube,
-        0,
-    ),
-    (
-        "HALF_RES_COLOR",
-        "half_res_color",
-        gdshader::check::types::SamplerKind::Tex2D,
-        2,
-    ),
-    (
-        "QUARTER_RES_COLOR",
-        "quarter_res_color",
-        gdshader::check::types::SamplerKind::Tex2D,
-        4,
-    ),
+    ("RADIANCE", "RADIANCE", gdshader::check::types::SamplerKind::Cube, 0),
+    ("HALF_RES_COLOR", "half_res_color", gdshader::check::types::SamplerKind::Tex2D, 2),
+    ("QUARTER_RES_COLOR", "quarter_res_color", gdshader::check::types::SamplerKind::Tex2D, 4),
 ];
 
-fn load_field(
-    b: &mut FnBuilder,
-    global: Handle<GlobalVariable>,
-    path: &[u32],
-    sp: Span,
-) -> Handle<E> {
+fn load_field(b: &mut FnBuilder, global: Handle<GlobalVariable>, path: &[u32], sp: Span) -> Handle<E> {
     let mut h = b.expr(E::GlobalVariable(global), sp);
     for &i in path {
         h = b.expr(E::AccessIndex { base: h, index: i }, sp);
@@ -202,14 +168,7 @@ fn load_field(
 
 fn eq_u32(b: &mut FnBuilder, v: Handle<E>, k: u32, sp: Span) -> Handle<E> {
     let k = b.expr(E::Literal(Literal::U32(k)), sp);
-    b.expr(
-        E::Binary {
-            op: Bo::Equal,
-            left: v,
-            right: k,
-        },
-        sp,
-    )
+    b.expr(E::Binary { op: Bo::Equal, left: v, right: k }, sp)
 }
 
 /// Reads a built-in variable in a function body (`None` when gdsky cannot supply it).
@@ -244,20 +203,11 @@ pub(crate) fn read_builtin(
             let rest = name.strip_prefix("LIGHT")?;
             let (n, field) = rest.split_once('_')?;
             let n: u32 = n.parse().ok()?;
-            let index = LIGHT_FIELDS
-                .iter()
-                .position(|f| f.eq_ignore_ascii_case(field))? as u32;
+            let index = LIGHT_FIELDS.iter().position(|f| f.eq_ignore_ascii_case(field))? as u32;
             let v = load_field(b, global, &[LIGHTS, n, index], sp);
             if field == "ENABLED" {
                 let zero = b.expr(E::Literal(Literal::U32(0)), sp);
-                b.expr(
-                    E::Binary {
-                        op: Bo::NotEqual,
-                        left: v,
-                        right: zero,
-                    },
-                    sp,
-                )
+                b.expr(E::Binary { op: Bo::NotEqual, left: v, right: zero }, sp)
             } else {
                 v
             }
@@ -279,11 +229,7 @@ pub enum Projection {
 
 impl Projection {
     /// Every projection, in entry-point order.
-    pub const ALL: [Projection; 3] = [
-        Projection::Panorama,
-        Projection::Camera,
-        Projection::Cubemap,
-    ];
+    pub const ALL: [Projection; 3] = [Projection::Panorama, Projection::Camera, Projection::Cubemap];
 
     /// The fragment entry point's name.
     pub fn entry_point(self) -> &'static str {
@@ -307,13 +253,8 @@ pub fn cube_face_basis(face: usize) -> [[f32; 3]; 3] {
         _ => ([0.0, 0.0, -1.0], [0.0, -1.0, 0.0]),
     };
     let z = [-target[0], -target[1], -target[2]];
-    let cross = |a: [f32; 3], b: [f32; 3]| {
-        [
-            a[1] * b[2] - a[2] * b[1],
-            a[2] * b[0] - a[0] * b[2],
-            a[0] * b[1] - a[1] * b[0],
-        ]
-    };
+    let cross =
+        |a: [f32; 3], b: [f32; 3]| [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
     let x = cross(up, z);
     let y = cross(z, x);
     [x, y, z]
@@ -334,10 +275,7 @@ fn vertex(lw: &mut Lowerer) {
     let sp = Span::UNDEFINED;
     let (Some(u32t), Some(v4)) = (
         lw.ty(&GdType::UINT, ast::Span::default()),
-        lw.ty(
-            &GdType::Vector(gdshader::check::types::Scalar::Float, 4),
-            ast::Span::default(),
-        ),
+        lw.ty(&GdType::Vector(gdshader::check::types::Scalar::Float, 4), ast::Span::default()),
     ) else {
         return;
     };
@@ -347,96 +285,25 @@ fn vertex(lw: &mut Lowerer) {
         ty: u32t,
         binding: Some(Binding::BuiltIn(BuiltIn::VertexIndex)),
     });
-    b.function.result = Some(FunctionResult {
-        ty: v4,
-        binding: Some(Binding::BuiltIn(BuiltIn::Position { invariant: false })),
-    });
+    b.function.result =
+        Some(FunctionResult { ty: v4, binding: Some(Binding::BuiltIn(BuiltIn::Position { invariant: false })) });
     // The triangle (-1,-1), (3,-1), (-1,3) covers the screen.
     let vi = b.expr(E::FunctionArgument(0), sp);
     let one_u = b.expr(E::Literal(Literal::U32(1)), sp);
     let two_u = b.expr(E::Literal(Literal::U32(2)), sp);
-    let shifted = b.expr(
-        E::Binary {
-            op: Bo::ShiftLeft,
-            left: vi,
-            right: one_u,
-        },
-        sp,
-    );
-    let xu = b.expr(
-        E::Binary {
-            op: Bo::And,
-            left: shifted,
-            right: two_u,
-        },
-        sp,
-    );
-    let yu = b.expr(
-        E::Binary {
-            op: Bo::And,
-            left: vi,
-            right: two_u,
-        },
-        sp,
-    );
-    let xf = b.expr(
-        E::As {
-            expr: xu,
-            kind: naga::ScalarKind::Float,
-            convert: Some(4),
-        },
-        sp,
-    );
-    let yf = b.expr(
-        E::As {
-            expr: yu,
-            kind: naga::ScalarKind::Float,
-            convert: Some(4),
-        },
-        sp,
-    );
+    let shifted = b.expr(E::Binary { op: Bo::ShiftLeft, left: vi, right: one_u }, sp);
+    let xu = b.expr(E::Binary { op: Bo::And, left: shifted, right: two_u }, sp);
+    let yu = b.expr(E::Binary { op: Bo::And, left: vi, right: two_u }, sp);
+    let xf = b.expr(E::As { expr: xu, kind: naga::ScalarKind::Float, convert: Some(4) }, sp);
+    let yf = b.expr(E::As { expr: yu, kind: naga::ScalarKind::Float, convert: Some(4) }, sp);
     let two = b.expr(E::Literal(Literal::F32(2.0)), sp);
     let one = b.expr(E::Literal(Literal::F32(1.0)), sp);
     let zero = b.expr(E::Literal(Literal::F32(0.0)), sp);
-    let x2 = b.expr(
-        E::Binary {
-            op: Bo::Multiply,
-            left: xf,
-            right: two,
-        },
-        sp,
-    );
-    let y2 = b.expr(
-        E::Binary {
-            op: Bo::Multiply,
-            left: yf,
-            right: two,
-        },
-        sp,
-    );
-    let x = b.expr(
-        E::Binary {
-            op: Bo::Subtract,
-            left: x2,
-            right: one,
-        },
-        sp,
-    );
-    let y = b.expr(
-        E::Binary {
-            op: Bo::Subtract,
-            left: y2,
-            right: one,
-        },
-        sp,
-    );
-    let pos = b.expr(
-        E::Compose {
-            ty: v4,
-            components: vec![x, y, zero, one],
-        },
-        sp,
-    );
+    let x2 = b.expr(E::Binary { op: Bo::Multiply, left: xf, right: two }, sp);
+    let y2 = b.expr(E::Binary { op: Bo::Multiply, left: yf, right: two }, sp);
+    let x = b.expr(E::Binary { op: Bo::Subtract, left: x2, right: one }, sp);
+    let y = b.expr(E::Binary { op: Bo::Subtract, left: y2, right: one }, sp);
+    let pos = b.expr(E::Compose { ty: v4, components: vec![x, y, zero, one] }, sp);
     b.stmt(Statement::Return { value: Some(pos) }, sp);
     let function = b.finish();
     lw.module.entry_points.push(EntryPoint {
@@ -455,10 +322,7 @@ fn vertex(lw: &mut Lowerer) {
 fn fragment(lw: &mut Lowerer, global: Handle<GlobalVariable>, projection: Projection) {
     let sp = Span::UNDEFINED;
     let fl = |lw: &mut Lowerer, n: u8| {
-        lw.ty(
-            &GdType::vector_of(gdshader::check::types::Scalar::Float, n),
-            ast::Span::default(),
-        )
+        lw.ty(&GdType::vector_of(gdshader::check::types::Scalar::Float, n), ast::Span::default())
     };
     let (Some(v2t), Some(v3t), Some(v4t)) = (fl(lw, 2), fl(lw, 3), fl(lw, 4)) else {
         return;
@@ -480,27 +344,9 @@ fn fragment(lw: &mut Lowerer, global: Handle<GlobalVariable>, projection: Projec
         }),
     });
     let f = |b: &mut FnBuilder, v: f64| b.expr(E::Literal(Literal::F32(v as f32)), sp);
-    let bin = |b: &mut FnBuilder, op, l, r| {
-        b.expr(
-            E::Binary {
-                op,
-                left: l,
-                right: r,
-            },
-            sp,
-        )
-    };
+    let bin = |b: &mut FnBuilder, op, l, r| b.expr(E::Binary { op, left: l, right: r }, sp);
     let math = |b: &mut FnBuilder, fun, args: &[Handle<E>]| {
-        b.expr(
-            E::Math {
-                fun,
-                arg: args[0],
-                arg1: args.get(1).copied(),
-                arg2: args.get(2).copied(),
-                arg3: None,
-            },
-            sp,
-        )
+        b.expr(E::Math { fun, arg: args[0], arg1: args.get(1).copied(), arg2: args.get(2).copied(), arg3: None }, sp)
     };
     let frag_coord = b.expr(E::FunctionArgument(0), sp);
     let xy = b.expr(
@@ -527,27 +373,12 @@ fn fragment(lw: &mut Lowerer, global: Handle<GlobalVariable>, projection: Projec
             let pi = f(&mut b, PI);
             let phi = bin(&mut b, Bo::Multiply, u, tau);
             let theta = bin(&mut b, Bo::Multiply, v, pi);
-            let (st, ct) = (
-                math(&mut b, Mf::Sin, &[theta]),
-                math(&mut b, Mf::Cos, &[theta]),
-            );
+            let (st, ct) = (math(&mut b, Mf::Sin, &[theta]), math(&mut b, Mf::Cos, &[theta]));
             let (sphi, cphi) = (math(&mut b, Mf::Sin, &[phi]), math(&mut b, Mf::Cos, &[phi]));
             let x = bin(&mut b, Bo::Multiply, st, sphi);
             let zc = bin(&mut b, Bo::Multiply, st, cphi);
-            let z = b.expr(
-                E::Unary {
-                    op: naga::UnaryOperator::Negate,
-                    expr: zc,
-                },
-                sp,
-            );
-            b.expr(
-                E::Compose {
-                    ty: v3t,
-                    components: vec![x, ct, z],
-                },
-                sp,
-            )
+            let z = b.expr(E::Unary { op: naga::UnaryOperator::Negate, expr: zc }, sp);
+            b.expr(E::Compose { ty: v3t, components: vec![x, ct, z] }, sp)
         }
         Projection::Camera | Projection::Cubemap => {
             // Godot's camera ray: ((2u − 1)·t·aspect, (1 − 2v)·t, −1), rotated by the basis.
@@ -557,39 +388,18 @@ fn fragment(lw: &mut Lowerer, global: Handle<GlobalVariable>, projection: Projec
             let v2 = bin(&mut b, Bo::Multiply, v, two);
             let ny = bin(&mut b, Bo::Subtract, one, v2);
             let (basis, t) = if projection == Projection::Camera {
-                (
-                    load_field(&mut b, global, &[CAMERA_BASIS], sp),
-                    load_field(&mut b, global, &[TAN_HALF_FOV], sp),
-                )
+                (load_field(&mut b, global, &[CAMERA_BASIS], sp), load_field(&mut b, global, &[TAN_HALF_FOV], sp))
             } else {
                 (cube_basis(lw, &mut b, global, sp), f(&mut b, 1.0))
             };
-            let sx = b.expr(
-                E::AccessIndex {
-                    base: screen,
-                    index: 0,
-                },
-                sp,
-            );
-            let sy = b.expr(
-                E::AccessIndex {
-                    base: screen,
-                    index: 1,
-                },
-                sp,
-            );
+            let sx = b.expr(E::AccessIndex { base: screen, index: 0 }, sp);
+            let sy = b.expr(E::AccessIndex { base: screen, index: 1 }, sp);
             let aspect = bin(&mut b, Bo::Divide, sx, sy);
             let nxt = bin(&mut b, Bo::Multiply, nx, t);
             let x = bin(&mut b, Bo::Multiply, nxt, aspect);
             let y = bin(&mut b, Bo::Multiply, ny, t);
             let minus_one = f(&mut b, -1.0);
-            let ray = b.expr(
-                E::Compose {
-                    ty: v3t,
-                    components: vec![x, y, minus_one],
-                },
-                sp,
-            );
+            let ray = b.expr(E::Compose { ty: v3t, components: vec![x, y, minus_one] }, sp);
             let world = bin(&mut b, Bo::Multiply, basis, ray);
             math(&mut b, Mf::Normalize, &[world])
         }
@@ -605,34 +415,10 @@ fn fragment(lw: &mut Lowerer, global: Handle<GlobalVariable>, projection: Projec
     set(lw, &mut b, "FRAGCOORD", frag_coord);
     if lw.builtins.privates.contains_key("SKY_COORDS") {
         // u = atan2(d.x, −d.z) / 2π wrapped to [0, 1); v = acos(d.y) / π.
-        let dx = b.expr(
-            E::AccessIndex {
-                base: dir,
-                index: 0,
-            },
-            sp,
-        );
-        let dy = b.expr(
-            E::AccessIndex {
-                base: dir,
-                index: 1,
-            },
-            sp,
-        );
-        let dz = b.expr(
-            E::AccessIndex {
-                base: dir,
-                index: 2,
-            },
-            sp,
-        );
-        let ndz = b.expr(
-            E::Unary {
-                op: naga::UnaryOperator::Negate,
-                expr: dz,
-            },
-            sp,
-        );
+        let dx = b.expr(E::AccessIndex { base: dir, index: 0 }, sp);
+        let dy = b.expr(E::AccessIndex { base: dir, index: 1 }, sp);
+        let dz = b.expr(E::AccessIndex { base: dir, index: 2 }, sp);
+        let ndz = b.expr(E::Unary { op: naga::UnaryOperator::Negate, expr: dz }, sp);
         let a = math(&mut b, Mf::Atan2, &[dx, ndz]);
         let tau = f(&mut b, 2.0 * PI);
         let su = bin(&mut b, Bo::Divide, a, tau);
@@ -640,39 +426,18 @@ fn fragment(lw: &mut Lowerer, global: Handle<GlobalVariable>, projection: Projec
         let ac = math(&mut b, Mf::Acos, &[dy]);
         let pi = f(&mut b, PI);
         let sv = bin(&mut b, Bo::Divide, ac, pi);
-        let coords = b.expr(
-            E::Compose {
-                ty: v2t,
-                components: vec![su, sv],
-            },
-            sp,
-        );
+        let coords = b.expr(E::Compose { ty: v2t, components: vec![su, sv] }, sp);
         set(lw, &mut b, "SKY_COORDS", coords);
     }
     let zero3 = f(&mut b, 0.0);
-    let zero3 = b.expr(
-        E::Splat {
-            size: VectorSize::Tri,
-            value: zero3,
-        },
-        sp,
-    );
+    let zero3 = b.expr(E::Splat { size: VectorSize::Tri, value: zero3 }, sp);
     set(lw, &mut b, "COLOR", zero3);
     let one = f(&mut b, 1.0);
     set(lw, &mut b, "ALPHA", one);
     let zero4 = f(&mut b, 0.0);
-    let zero4 = b.expr(
-        E::Splat {
-            size: VectorSize::Quad,
-            value: zero4,
-        },
-        sp,
-    );
+    let zero4 = b.expr(E::Splat { size: VectorSize::Quad, value: zero4 }, sp);
     set(lw, &mut b, "FOG", zero4);
-    for (name, texture) in [
-        ("HALF_RES_COLOR", "half_res_color"),
-        ("QUARTER_RES_COLOR", "quarter_res_color"),
-    ] {
+    for (name, texture) in [("HALF_RES_COLOR", "half_res_color"), ("QUARTER_RES_COLOR", "quarter_res_color")] {
         // Godot samples the sub-pass at SCREEN_UV, LOD 0, and divides by the luminance
         // multiplier to return to shader units.
         let Some(slot) = lw.textures.get(texture).cloned() else {
@@ -695,25 +460,12 @@ fn fragment(lw: &mut Lowerer, global: Handle<GlobalVariable>, projection: Projec
             sp,
         );
         let lum = load_field(&mut b, global, &[LUMINANCE], sp);
-        let lum = b.expr(
-            E::Splat {
-                size: VectorSize::Quad,
-                value: lum,
-            },
-            sp,
-        );
+        let lum = b.expr(E::Splat { size: VectorSize::Quad, value: lum }, sp);
         let value = bin(&mut b, Bo::Divide, texel, lum);
         set(lw, &mut b, name, value);
     }
     if let Some(sky) = lw.sky_function {
-        b.stmt(
-            Statement::Call {
-                function: sky,
-                arguments: Vec::new(),
-                result: None,
-            },
-            sp,
-        );
+        b.stmt(Statement::Call { function: sky, arguments: Vec::new(), result: None }, sp);
     }
     let read = |lw: &Lowerer, b: &mut FnBuilder, name: &str| {
         lw.builtins.privates.get(name).map(|g| {
@@ -729,13 +481,7 @@ fn fragment(lw: &mut Lowerer, global: Handle<GlobalVariable>, projection: Projec
         && let Some(fog) = read(lw, &mut b, "FOG")
     {
         // Godot: if (FOG.a > 0) rgb = mix(rgb, FOG.rgb, FOG.a), never in the cubemap pass.
-        let fa = b.expr(
-            E::AccessIndex {
-                base: fog,
-                index: 3,
-            },
-            sp,
-        );
+        let fa = b.expr(E::AccessIndex { base: fog, index: 3 }, sp);
         let frgb = b.expr(
             E::Swizzle {
                 size: VectorSize::Tri,
@@ -752,43 +498,17 @@ fn fragment(lw: &mut Lowerer, global: Handle<GlobalVariable>, projection: Projec
         let mixed = math(&mut b, Mf::Mix, &[rgb, frgb, fa]);
         let zero = f(&mut b, 0.0);
         let has_fog = bin(&mut b, Bo::Greater, fa, zero);
-        let not_cube = b.expr(
-            E::Unary {
-                op: naga::UnaryOperator::LogicalNot,
-                expr: is_cubemap,
-            },
-            sp,
-        );
+        let not_cube = b.expr(E::Unary { op: naga::UnaryOperator::LogicalNot, expr: is_cubemap }, sp);
         let apply = bin(&mut b, Bo::LogicalAnd, has_fog, not_cube);
-        rgb = b.expr(
-            E::Select {
-                condition: apply,
-                accept: mixed,
-                reject: rgb,
-            },
-            sp,
-        );
+        rgb = b.expr(E::Select { condition: apply, accept: mixed, reject: rgb }, sp);
     }
     let lum = load_field(&mut b, global, &[LUMINANCE], sp);
     let rgb = bin(&mut b, Bo::Multiply, rgb, lum);
     // Alpha is kept only where Godot keeps it: the sub-passes and the cubemap.
     let full = eq_u32(&mut b, pass, PASS_FULL, sp);
     let zero = f(&mut b, 0.0);
-    let alpha = b.expr(
-        E::Select {
-            condition: full,
-            accept: zero,
-            reject: alpha,
-        },
-        sp,
-    );
-    let out = b.expr(
-        E::Compose {
-            ty: v4t,
-            components: vec![rgb, alpha],
-        },
-        sp,
-    );
+    let alpha = b.expr(E::Select { condition: full, accept: zero, reject: alpha }, sp);
+    let out = b.expr(E::Compose { ty: v4t, components: vec![rgb, alpha] }, sp);
     b.stmt(Statement::Return { value: Some(out) }, sp);
     let function = b.finish();
     lw.module.entry_points.push(EntryPoint {
@@ -805,18 +525,10 @@ fn fragment(lw: &mut Lowerer, global: Handle<GlobalVariable>, projection: Projec
 }
 
 /// The basis of the cube face selected by the `cube_face` field, from a constant table.
-fn cube_basis(
-    lw: &mut Lowerer,
-    b: &mut FnBuilder,
-    global: Handle<GlobalVariable>,
-    sp: Span,
-) -> Handle<E> {
+fn cube_basis(lw: &mut Lowerer, b: &mut FnBuilder, global: Handle<GlobalVariable>, sp: Span) -> Handle<E> {
     let (Some(m3), Some(v3)) = (
         lw.ty(&GdType::Matrix(3), ast::Span::default()),
-        lw.ty(
-            &GdType::Vector(gdshader::check::types::Scalar::Float, 3),
-            ast::Span::default(),
-        ),
+        lw.ty(&GdType::Vector(gdshader::check::types::Scalar::Float, 3), ast::Span::default()),
     ) else {
         return b.expr(E::Literal(Literal::F32(0.0)), sp);
     };
@@ -825,9 +537,7 @@ fn cube_basis(
             name: None,
             inner: TypeInner::Array {
                 base: m3,
-                size: naga::ArraySize::Constant(
-                    std::num::NonZeroU32::new(6).unwrap_or(std::num::NonZeroU32::MIN),
-                ),
+                size: naga::ArraySize::Constant(std::num::NonZeroU32::new(6).unwrap_or(std::num::NonZeroU32::MIN)),
                 stride: 48,
             },
         },
@@ -839,59 +549,19 @@ fn cube_basis(
             let cols = cube_face_basis(face)
                 .iter()
                 .map(|c| {
-                    let comps = c
-                        .iter()
-                        .map(|&x| ge.append(E::Literal(Literal::F32(x)), sp))
-                        .collect();
-                    ge.append(
-                        E::Compose {
-                            ty: v3,
-                            components: comps,
-                        },
-                        sp,
-                    )
+                    let comps = c.iter().map(|&x| ge.append(E::Literal(Literal::F32(x)), sp)).collect();
+                    ge.append(E::Compose { ty: v3, components: comps }, sp)
                 })
                 .collect();
-            ge.append(
-                E::Compose {
-                    ty: m3,
-                    components: cols,
-                },
-                sp,
-            )
+            ge.append(E::Compose { ty: m3, components: cols }, sp)
         })
         .collect();
-    let init = ge.append(
-        E::Compose {
-            ty: table_ty,
-            components: faces,
-        },
-        sp,
-    );
-    let table = lw.module.constants.append(
-        naga::Constant {
-            name: Some("CUBE_FACES".into()),
-            ty: table_ty,
-            init,
-        },
-        sp,
-    );
+    let init = ge.append(E::Compose { ty: table_ty, components: faces }, sp);
+    let table = lw.module.constants.append(naga::Constant { name: Some("CUBE_FACES".into()), ty: table_ty, init }, sp);
     let face = load_field(b, global, &[CUBE_FACE], sp);
     let c = b.expr(E::Constant(table), sp);
     let tmp = b.local(Some("cube_faces"), table_ty, sp);
-    b.stmt(
-        Statement::Store {
-            pointer: tmp,
-            value: c,
-        },
-        sp,
-    );
-    let p = b.expr(
-        E::Access {
-            base: tmp,
-            index: face,
-        },
-        sp,
-    );
+    b.stmt(Statement::Store { pointer: tmp, value: c }, sp);
+    let p = b.expr(E::Access { base: tmp, index: face }, sp);
     b.expr(E::Load { pointer: p }, sp)
 }

@@ -11,10 +11,7 @@ struct SelfLoader(Vec<u8>);
 impl Loader for SelfLoader {
     fn load(&mut self, path: &Path) -> std::io::Result<Vec<u8>> {
         if path.to_string_lossy().contains("missing") {
-            return Err(std::io::Error::new(
-                std::io::ErrorKind::NotFound,
-                "not found",
-            ));
+            return Err(std::io::Error::new(std::io::ErrorKind::NotFound, "not found"));
         }
         Ok(self.0.clone())
     }
@@ -28,20 +25,14 @@ fn every_accepted_corpus_shader_lowers_to_a_valid_module() {
     for entry in std::fs::read_dir(&dir).expect("the corpus directory exists") {
         let path = entry.expect("readable directory").path();
         let data = std::fs::read(&path).expect("readable corpus file");
-        let front = gdshader::check_source(
-            "fuzz.gdshader",
-            data.clone(),
-            Some("fuzz.gdshader".into()),
-            &mut SelfLoader(data),
-        );
+        let front =
+            gdshader::check_source("fuzz.gdshader", data.clone(), Some("fuzz.gdshader".into()), &mut SelfLoader(data));
         if front.shader.is_none() {
             continue;
         }
         accepted += 1;
         if let Err(diagnostics) = gdsky_naga::lower(&front)
-            && diagnostics
-                .iter()
-                .any(|d| d.code == gdsky_naga::INVALID_MODULE)
+            && diagnostics.iter().any(|d| d.code == gdsky_naga::INVALID_MODULE)
         {
             failures.push(format!(
                 "{}:\n{}",

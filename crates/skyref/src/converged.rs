@@ -18,10 +18,7 @@ pub struct Converged {
 
 impl Default for Converged {
     fn default() -> Self {
-        Self {
-            view_samples: 1024,
-            sun_samples: 256,
-        }
+        Self { view_samples: 1024, sun_samples: 256 }
     }
 }
 
@@ -34,10 +31,7 @@ impl Converged {
     /// Twice the sample counts (saturating at `i32::MAX`).
     #[must_use]
     pub fn doubled(&self) -> Self {
-        Self {
-            view_samples: self.view_samples.saturating_mul(2),
-            sun_samples: self.sun_samples.saturating_mul(2),
-        }
+        Self { view_samples: self.view_samples.saturating_mul(2), sun_samples: self.sun_samples.saturating_mul(2) }
     }
 }
 
@@ -89,14 +83,7 @@ pub fn convergence_check(
     height: u32,
 ) -> ConvergenceReport {
     let doubled = converged.doubled();
-    let a = render_converged(
-        params,
-        scene,
-        Projection::Panorama,
-        width,
-        height,
-        converged,
-    );
+    let a = render_converged(params, scene, Projection::Panorama, width, height, converged);
     let b = render_converged(params, scene, Projection::Panorama, width, height, &doubled);
     let mut rel = relative_changes(&a, &b, REL_FLOOR);
     let (max, p99, mean) = summarize(&mut rel);

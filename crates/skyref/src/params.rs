@@ -101,11 +101,7 @@ impl FreemanParams {
     /// The same parameters with other sample counts (`view_samples`, `sun_samples`).
     #[must_use]
     pub fn with_samples(self, view_samples: i32, sun_samples: i32) -> Self {
-        Self {
-            view_samples,
-            sun_samples,
-            ..self
-        }
+        Self { view_samples, sun_samples, ..self }
     }
 }
 
@@ -160,8 +156,7 @@ impl Scene {
     /// The camera basis, Godot's Euler YXZ with no roll: R_y(yaw) · R_x(pitch). Its columns are
     /// the camera's right, up and back (+Z) axes in world space.
     pub fn camera_basis(&self) -> DMat3 {
-        DMat3::from_rotation_y(self.yaw_deg.to_radians())
-            * DMat3::from_rotation_x(self.pitch_deg.to_radians())
+        DMat3::from_rotation_y(self.yaw_deg.to_radians()) * DMat3::from_rotation_x(self.pitch_deg.to_radians())
     }
 
     /// tan(fov / 2) for the vertical field of view (`tan_half_fov` of the converted shader's

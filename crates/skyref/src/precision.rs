@@ -175,11 +175,7 @@ macro_rules! freeman_sky {
         /// sphere_radius)`: the two distances along the ray to a sphere centred at the origin,
         /// or (−1, −1) when the ray misses it (Inigo Quilez's intersector; assumes a unit
         /// direction).
-        pub fn ray_sphere_intersection(
-            ray_origin: $V3,
-            ray_direction: $V3,
-            sphere_radius: $T,
-        ) -> $V2 {
+        pub fn ray_sphere_intersection(ray_origin: $V3, ray_direction: $V3, sphere_radius: $T) -> $V2 {
             let b = dot(ray_origin, ray_direction);
             let c = dot(ray_origin, ray_origin) - sphere_radius * sphere_radius;
             let discriminant = b * b - c;
@@ -243,43 +239,30 @@ macro_rules! freeman_sky {
                 $V3::new(
                     (-altitude / self.rayleigh_scale_height).exp(),
                     (-altitude / self.mie_scale_height).exp(),
-                    max(
-                        0.0,
-                        1.0 - (altitude - self.ozone_center).abs() / (self.ozone_width / 2.0),
-                    ),
+                    max(0.0, 1.0 - (altitude - self.ozone_center).abs() / (self.ozone_width / 2.0)),
                 )
             }
 
             /// `vec3 get_transmittance(vec3 origin, vec3 direction, float dist, int samples)`:
             /// Beer-Lambert transmittance along a path, trapezoidal densities.
-            pub fn get_transmittance(
-                &self,
-                origin: $V3,
-                direction: $V3,
-                dist: $T,
-                samples: i32,
-            ) -> $V3 {
+            pub fn get_transmittance(&self, origin: $V3, direction: $V3, dist: $T, samples: i32) -> $V3 {
                 let step_length = dist / samples as $T;
                 let mut accumulated_optical_depth = $V3::splat(0.0);
                 let mut optical_depth_start = self.get_optical_depth_at_point(origin);
 
                 // Rust: `for (int i = 0; i < samples; i++)`; an empty range when samples <= 0.
                 for i in 0..samples {
-                    let optical_depth_end = self.get_optical_depth_at_point(
-                        origin + direction * ((i + 1) as $T) * step_length,
-                    );
-                    let step_optical_depth =
-                        mix(optical_depth_start, optical_depth_end, 0.5) * step_length;
+                    let optical_depth_end =
+                        self.get_optical_depth_at_point(origin + direction * ((i + 1) as $T) * step_length);
+                    let step_optical_depth = mix(optical_depth_start, optical_depth_end, 0.5) * step_length;
 
                     accumulated_optical_depth += step_optical_depth;
                     optical_depth_start = optical_depth_end;
                 }
 
-                exp(
-                    -(self.get_rayleigh_scattering() * accumulated_optical_depth.x
-                        + self.get_mie_extinction() * accumulated_optical_depth.y
-                        + ozone_extinction() * accumulated_optical_depth.z),
-                )
+                exp(-(self.get_rayleigh_scattering() * accumulated_optical_depth.x
+                    + self.get_mie_extinction() * accumulated_optical_depth.y
+                    + ozone_extinction() * accumulated_optical_depth.z))
             }
 
             /// `vec3 integrate_radiance(vec3 ray_origin, vec3 ray_direction, float
@@ -304,12 +287,7 @@ macro_rules! freeman_sky {
 
                 // Phases.
                 let rayleigh_phase = get_rayleigh_phase(cos_theta);
-                let mie_phase = get_mie_phase(
-                    cos_theta,
-                    self.mie_g_backward,
-                    self.mie_g_forward,
-                    self.mie_weight,
-                );
+                let mie_phase = get_mie_phase(cos_theta, self.mie_g_backward, self.mie_g_forward, self.mie_weight);
                 let multi_scattering_mie_phase = get_mie_phase(
                     cos_theta,
                     self.multiscattering_mie_g_backward,
@@ -329,13 +307,11 @@ macro_rules! freeman_sky {
 
                 for i in 0..samples {
                     // Optical deph at the end of the sample.
-                    let optical_depth_end = self.get_optical_depth_at_point(
-                        ray_origin + ray_direction * ((i + 1) as $T) * step_length,
-                    );
+                    let optical_depth_end =
+                        self.get_optical_depth_at_point(ray_origin + ray_direction * ((i + 1) as $T) * step_length);
 
                     // Average them. Jitter changes the weight of the average.
-                    let step_optical_depth =
-                        mix(optical_depth_start, optical_depth_end, 0.5) * step_length;
+                    let step_optical_depth = mix(optical_depth_start, optical_depth_end, 0.5) * step_length;
 
                     // Accumulate the optical depth for this step
                     accumulated_optical_depth += step_optical_depth;
@@ -343,34 +319,26 @@ macro_rules! freeman_sky {
                     let sample_point = ray_origin + ray_direction * (i as $T + 0.5) * step_length;
 
                     // Calculate transmittance.
-                    view_transmittance = exp(-(self.get_rayleigh_scattering()
-                        * accumulated_optical_depth.x
+                    view_transmittance = exp(-(self.get_rayleigh_scattering() * accumulated_optical_depth.x
                         + self.get_mie_extinction() * accumulated_optical_depth.y
                         + ozone_extinction() * accumulated_optical_depth.z));
 
                     let mut sun_radiance = $V3::splat(0.0);
 
                     // Planet intersection.
-                    let planet_hit =
-                        ray_sphere_intersection(sample_point, sun_direction, self.planet_radius);
+                    let planet_hit = ray_sphere_intersection(sample_point, sun_direction, self.planet_radius);
 
                     let hits_ground = planet_hit.y > 0.0;
 
                     // If the sun is NOT occluded by the planet, calculate sun radiance.
                     if !hits_ground {
                         // Atmosphere intersection.
-                        let atmosphere_hit =
-                            ray_sphere_intersection(sample_point, sun_direction, atmosphere_radius);
-                        let sun_transmittance = self.get_transmittance(
-                            sample_point,
-                            sun_direction,
-                            atmosphere_hit.y,
-                            self.sun_samples,
-                        );
+                        let atmosphere_hit = ray_sphere_intersection(sample_point, sun_direction, atmosphere_radius);
+                        let sun_transmittance =
+                            self.get_transmittance(sample_point, sun_direction, atmosphere_hit.y, self.sun_samples);
                         // Rust: vec3 + float adds the scalar to each component, as in GLSL.
-                        let scattering_coeff =
-                            step_optical_depth.x * self.get_rayleigh_scattering() * rayleigh_phase
-                                + step_optical_depth.y * self.mie_scattering * mie_phase;
+                        let scattering_coeff = step_optical_depth.x * self.get_rayleigh_scattering() * rayleigh_phase
+                            + step_optical_depth.y * self.mie_scattering * mie_phase;
 
                         sun_radiance = sun_transmittance * self.sun_intensity * scattering_coeff;
                     }
@@ -379,9 +347,8 @@ macro_rules! freeman_sky {
                     accumulated_radiance += sun_radiance * view_transmittance;
 
                     // Multi scattering approximations.
-                    let rayleigh_ambient = step_optical_depth.x
-                        * self.get_rayleigh_scattering()
-                        * self.rayleigh_multi_scattering;
+                    let rayleigh_ambient =
+                        step_optical_depth.x * self.get_rayleigh_scattering() * self.rayleigh_multi_scattering;
                     let mie_ambient = $V3::splat(
                         step_optical_depth.y
                             * self.mie_scattering
@@ -397,13 +364,10 @@ macro_rules! freeman_sky {
                 }
 
                 let mut sun_disk = $V3::splat(0.0);
-                let planet_hit =
-                    ray_sphere_intersection(ray_origin, ray_direction, self.planet_radius).y;
+                let planet_hit = ray_sphere_intersection(ray_origin, ray_direction, self.planet_radius).y;
 
                 if planet_hit < 0.0 {
-                    sun_disk = smoothstep(0.9998, 1.0, cos_theta)
-                        * self.sun_intensity
-                        * view_transmittance;
+                    sun_disk = smoothstep(0.9998, 1.0, cos_theta) * self.sun_intensity * view_transmittance;
                 }
                 accumulated_radiance + sun_disk
             }
@@ -422,48 +386,28 @@ macro_rules! freeman_sky {
                     // Position clamped to prevent entering the "low precision zone"
                     let ray_origin = $V3::new(
                         0.0,
-                        self.planet_radius
-                            + clamp(
-                                inputs.position.y + self.base_altitude,
-                                0.5,
-                                self.atmosphere_height,
-                            ),
+                        self.planet_radius + clamp(inputs.position.y + self.base_altitude, 0.5, self.atmosphere_height),
                         0.0,
                     );
                     let ray_direction = inputs.eyedir;
 
                     // Atmosphere intersection.
-                    let atmosphere_hit =
-                        ray_sphere_intersection(ray_origin, ray_direction, atmosphere_radius);
+                    let atmosphere_hit = ray_sphere_intersection(ray_origin, ray_direction, atmosphere_radius);
 
                     // Ground intersection.
-                    let ground_hit =
-                        ray_sphere_intersection(ray_origin, ray_direction, self.planet_radius);
+                    let ground_hit = ray_sphere_intersection(ray_origin, ray_direction, self.planet_radius);
                     let hits_ground = ground_hit.y > 0.0;
 
                     // Clamp the atmosphere to the ocean.
-                    let atmosphere_distance = if hits_ground {
-                        ground_hit.x
-                    } else {
-                        atmosphere_hit.y
-                    };
+                    let atmosphere_distance = if hits_ground { ground_hit.x } else { atmosphere_hit.y };
 
                     // Use half the samples for view to ground, and the other half from ground
                     // back to sky. Rust: i32 division truncates toward zero, as GLSL's does.
-                    let samples = if hits_ground {
-                        self.view_samples / 2
-                    } else {
-                        self.view_samples
-                    };
+                    let samples = if hits_ground { self.view_samples / 2 } else { self.view_samples };
 
                     // atmosphere radiance.
-                    let atmosphere_radiance = self.integrate_radiance(
-                        ray_origin,
-                        ray_direction,
-                        atmosphere_distance,
-                        samples,
-                        sun_direction,
-                    );
+                    let atmosphere_radiance =
+                        self.integrate_radiance(ray_origin, ray_direction, atmosphere_distance, samples, sun_direction);
 
                     final_color = atmosphere_radiance;
 
@@ -478,8 +422,7 @@ macro_rules! freeman_sky {
                         let cos_theta = dot(ray_direction, sun_direction);
 
                         let ground_to_atmosphere_distance =
-                            ray_sphere_intersection(ground_point, ground_normal, atmosphere_radius)
-                                .y;
+                            ray_sphere_intersection(ground_point, ground_normal, atmosphere_radius).y;
 
                         // Distance to cover by each step.
                         let step_length = ground_to_atmosphere_distance / samples as $T;
@@ -507,27 +450,23 @@ macro_rules! freeman_sky {
                             );
 
                             // Average them. Jitter changes the weight of the average.
-                            let step_optical_depth =
-                                mix(optical_depth_start, optical_depth_end, 0.5) * step_length;
+                            let step_optical_depth = mix(optical_depth_start, optical_depth_end, 0.5) * step_length;
 
                             // Accumulate the optical depth for this step
                             accumulated_optical_depth += step_optical_depth;
 
                             // I'm not quite sure the jitter belongs here too.
                             // Rust: `sample_point` is computed and unused in the shader.
-                            let _sample_point =
-                                ground_point + ground_normal * (i as $T + 0.5) * step_length;
+                            let _sample_point = ground_point + ground_normal * (i as $T + 0.5) * step_length;
 
                             // Calculate transmittance.
-                            let transmittance = exp(-(self.get_rayleigh_scattering()
-                                * accumulated_optical_depth.x
+                            let transmittance = exp(-(self.get_rayleigh_scattering() * accumulated_optical_depth.x
                                 + self.get_mie_extinction() * accumulated_optical_depth.y
                                 + ozone_extinction() * accumulated_optical_depth.z));
 
                             // Multi scattering approximations.
-                            let rayleigh_ambient = step_optical_depth.x
-                                * self.get_rayleigh_scattering()
-                                * self.rayleigh_multi_scattering;
+                            let rayleigh_ambient =
+                                step_optical_depth.x * self.get_rayleigh_scattering() * self.rayleigh_multi_scattering;
 
                             //NOTE: Mie multi scattering is not isotropic. If we add it to the
                             // planet, we could see the sun through it.
@@ -543,12 +482,8 @@ macro_rules! freeman_sky {
                         let direct_light = max(dot(ground_normal, sun_direction), 0.0);
 
                         if direct_light > 0.0 {
-                            let ground_to_sun_distance = ray_sphere_intersection(
-                                ground_point,
-                                sun_direction,
-                                atmosphere_radius,
-                            )
-                            .y;
+                            let ground_to_sun_distance =
+                                ray_sphere_intersection(ground_point, sun_direction, atmosphere_radius).y;
                             sun_transmittance = self.get_transmittance(
                                 ground_point,
                                 sun_direction,
@@ -561,16 +496,11 @@ macro_rules! freeman_sky {
                         // sky. So we make the same unit affect the ground harder.
                         // Rust: `a * (…) * 1.0/PI` parses as `((a * (…)) * 1.0) / PI` in GLSL.
                         let ground_albedo = self.ground_color
-                            * (direct_light * self.sun_intensity * sun_transmittance
-                                + accumulated_radiance * 75.0)
+                            * (direct_light * self.sun_intensity * sun_transmittance + accumulated_radiance * 75.0)
                             * 1.0
                             / PI;
-                        let transmittance_to_eye = self.get_transmittance(
-                            ray_origin,
-                            ray_direction,
-                            atmosphere_distance,
-                            self.view_samples,
-                        );
+                        let transmittance_to_eye =
+                            self.get_transmittance(ray_origin, ray_direction, atmosphere_distance, self.view_samples);
 
                         final_color += ground_albedo * transmittance_to_eye;
                     }
@@ -583,14 +513,7 @@ macro_rules! freeman_sky {
         /// exactly as the converted shader's `fs_panorama` / `fs_camera` do (pixel centres, row
         /// 0 at the top). The camera basis and tan(fov/2) are computed in f64 and rounded, as a
         /// host fills the built-ins buffer.
-        pub fn eyedir(
-            scene: &Scene,
-            projection: Projection,
-            x: u32,
-            y: u32,
-            width: u32,
-            height: u32,
-        ) -> $V3 {
+        pub fn eyedir(scene: &Scene, projection: Projection, x: u32, y: u32, width: u32, height: u32) -> $V3 {
             let screen = $V2::new(width as $T, height as $T);
             let uv = $V2::new(x as $T + 0.5, y as $T + 0.5) / screen;
             let (u, v) = (uv.x, uv.y);

@@ -6,24 +6,15 @@ use crate::{FreemanParams, Projection, Scene};
 use glam::{DVec3, Vec3};
 
 fn fixture_text() -> String {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../fixtures/freeman_sky.gdshader"
-    );
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/freeman_sky.gdshader");
     std::fs::read_to_string(path).expect("fixtures/freeman_sky.gdshader is readable")
 }
 
 /// Parses a default value as written in the shader: a number or `vec3(a, b, c)`.
 fn parse_value(text: &str) -> Vec<f64> {
     let text = text.trim();
-    let inner = text
-        .strip_prefix("vec3(")
-        .and_then(|t| t.strip_suffix(')'))
-        .unwrap_or(text);
-    inner
-        .split(',')
-        .map(|n| n.trim().parse::<f64>().expect("a number"))
-        .collect()
+    let inner = text.strip_prefix("vec3(").and_then(|t| t.strip_suffix(')')).unwrap_or(text);
+    inner.split(',').map(|n| n.trim().parse::<f64>().expect("a number")).collect()
 }
 
 /// The default of `FreemanParams` for the uniform called `name`, with its GLSL type.
@@ -72,8 +63,7 @@ fn defaults_match_fixture() {
         let mut words = decl.split([' ', '\t', ':']).filter(|w| !w.is_empty());
         let ty = words.next().expect("a type");
         let name = words.next().expect("a name");
-        let (our_ty, ours) = default_of(name)
-            .unwrap_or_else(|| panic!("uniform {name} has no field in FreemanParams"));
+        let (our_ty, ours) = default_of(name).unwrap_or_else(|| panic!("uniform {name} has no field in FreemanParams"));
         assert_eq!(ty, our_ty, "type of {name}");
         assert_eq!(parse_value(value), ours, "default of {name}");
         seen.push(name.to_string());
@@ -81,35 +71,19 @@ fn defaults_match_fixture() {
     assert_eq!(seen.len(), 22, "uniforms found in the fixture: {seen:?}");
 
     // The one constant, too.
-    let line = text
-        .lines()
-        .find(|l| l.contains("const vec3 ozone_extinction"))
-        .expect("ozone_extinction is declared");
+    let line = text.lines().find(|l| l.contains("const vec3 ozone_extinction")).expect("ozone_extinction is declared");
     let (_, rhs) = line.split_once('=').expect("has a value");
     let (vec, scale) = rhs.split_once('*').expect("vec3(...) * scale");
-    let scale: f64 = scale
-        .trim()
-        .trim_end_matches(';')
-        .parse()
-        .expect("a number");
+    let scale: f64 = scale.trim().trim_end_matches(';').parse().expect("a number");
     let v = parse_value(vec);
     let ours = crate::f64::ozone_extinction();
-    assert_eq!(
-        [ours.x, ours.y, ours.z],
-        [v[0] * scale, v[1] * scale, v[2] * scale]
-    );
+    assert_eq!([ours.x, ours.y, ours.z], [v[0] * scale, v[1] * scale, v[2] * scale]);
 }
 
 #[test]
 fn sun_direction_convention() {
-    let dir = |e: f64, a: f64| {
-        Scene {
-            sun_elevation_deg: e,
-            sun_azimuth_deg: a,
-            ..Scene::default()
-        }
-        .light0_direction()
-    };
+    let dir =
+        |e: f64, a: f64| Scene { sun_elevation_deg: e, sun_azimuth_deg: a, ..Scene::default() }.light0_direction();
     assert!((dir(0.0, 0.0) - DVec3::NEG_Z).length() < 1e-15);
     assert!((dir(0.0, 90.0) - DVec3::X).length() < 1e-15);
     assert!((dir(90.0, 37.0) - DVec3::Y).length() < 1e-15);
@@ -129,10 +103,7 @@ fn panorama_eyedir_inverts_sky_coords() {
             let u = (d.x.atan2(-d.z) / std::f64::consts::TAU).rem_euclid(1.0);
             let v = d.y.acos() / std::f64::consts::PI;
             let (eu, ev) = ((f64::from(x) + 0.5) / 64.0, (f64::from(y) + 0.5) / 32.0);
-            assert!(
-                (u - eu).abs() < 1e-12 && (v - ev).abs() < 1e-12,
-                "({x}, {y})"
-            );
+            assert!((u - eu).abs() < 1e-12 && (v - ev).abs() < 1e-12, "({x}, {y})");
             assert!((d.length() - 1.0).abs() < 1e-12);
         }
     }
@@ -146,11 +117,7 @@ fn panorama_eyedir_inverts_sky_coords() {
 #[test]
 fn camera_eyedir_follows_godot() {
     let eye = |yaw: f64, pitch: f64, x: u32, y: u32, w: u32, h: u32| {
-        let scene = Scene {
-            yaw_deg: yaw,
-            pitch_deg: pitch,
-            ..Scene::default()
-        };
+        let scene = Scene { yaw_deg: yaw, pitch_deg: pitch, ..Scene::default() };
         crate::f64::eyedir(&scene, Projection::Camera, x, y, w, h)
     };
     // The centre of an odd-sized image looks toward −Z at yaw 0, pitch 0.
@@ -175,12 +142,7 @@ fn camera_eyedir_follows_godot() {
 }
 
 fn scene_10deg_1m() -> Scene {
-    Scene {
-        sun_elevation_deg: 10.0,
-        sun_azimuth_deg: 0.0,
-        position: DVec3::new(0.0, 1.0, 0.0),
-        ..Scene::default()
-    }
+    Scene { sun_elevation_deg: 10.0, sun_azimuth_deg: 0.0, position: DVec3::new(0.0, 1.0, 0.0), ..Scene::default() }
 }
 
 /// f32 against f64 at defaults, 64×32 panorama, sun 10°, camera at 1 m. Measured (this test
@@ -204,10 +166,7 @@ fn f32_vs_f64_at_defaults() {
 #[test]
 fn light_disabled_is_black() {
     let params = FreemanParams::default();
-    let scene = Scene {
-        light_enabled: false,
-        ..scene_10deg_1m()
-    };
+    let scene = Scene { light_enabled: false, ..scene_10deg_1m() };
     for projection in [Projection::Panorama, Projection::Camera] {
         let a = crate::f32::render(&params, &scene, projection, 16, 8);
         assert!(a.iter().all(|p| *p == [0.0; 4]));
@@ -218,18 +177,9 @@ fn light_disabled_is_black() {
 
 #[test]
 fn alpha_is_zero_and_colours_finite() {
-    let a = crate::f32::render(
-        &FreemanParams::default(),
-        &scene_10deg_1m(),
-        Projection::Camera,
-        12,
-        9,
-    );
+    let a = crate::f32::render(&FreemanParams::default(), &scene_10deg_1m(), Projection::Camera, 12, 9);
     assert_eq!(a.len(), 12 * 9);
-    assert!(
-        a.iter()
-            .all(|p| p[3] == 0.0 && p[..3].iter().all(|c| c.is_finite() && *c >= 0.0))
-    );
+    assert!(a.iter().all(|p| p[3] == 0.0 && p[..3].iter().all(|c| c.is_finite() && *c >= 0.0)));
 }
 
 /// Sun at the zenith, looking straight up: the sun disk adds sun_intensity × the view
@@ -242,18 +192,10 @@ fn alpha_is_zero_and_colours_finite() {
 #[test]
 fn sun_disk_at_zenith() {
     let params = FreemanParams::default();
-    let scene = Scene {
-        sun_elevation_deg: 90.0,
-        ..scene_10deg_1m()
-    };
+    let scene = Scene { sun_elevation_deg: 90.0, ..scene_10deg_1m() };
     let u = crate::f64::Uniforms::from(&params);
     let origin = DVec3::new(0.0, params.planet_radius + 1.0, 0.0);
-    let transmittance = u.get_transmittance(
-        origin,
-        DVec3::Y,
-        params.atmosphere_height - 1.0,
-        params.view_samples,
-    );
+    let transmittance = u.get_transmittance(origin, DVec3::Y, params.atmosphere_height - 1.0, params.view_samples);
     let expected = transmittance * params.sun_intensity;
 
     let at = |deg: f64| DVec3::new(deg.to_radians().sin(), deg.to_radians().cos(), 0.0);
@@ -283,11 +225,7 @@ fn sun_disk_at_zenith() {
 #[test]
 fn panorama_symmetric_about_sun_azimuth() {
     let params = FreemanParams::default();
-    let scene = Scene {
-        sun_azimuth_deg: 135.0,
-        sun_elevation_deg: 5.0,
-        ..scene_10deg_1m()
-    };
+    let scene = Scene { sun_azimuth_deg: 135.0, sun_elevation_deg: 5.0, ..scene_10deg_1m() };
     let (w, h) = (64usize, 32usize);
     let img = crate::f64::render(&params, &scene, Projection::Panorama, w as u32, h as u32);
     let img32 = crate::f32::render(&params, &scene, Projection::Panorama, w as u32, h as u32);
@@ -312,33 +250,19 @@ fn panorama_symmetric_about_sun_azimuth() {
 #[test]
 fn brightest_pixel_is_the_sun() {
     let params = FreemanParams::default();
-    let scene = Scene {
-        sun_elevation_deg: 30.0,
-        sun_azimuth_deg: 90.0,
-        ..scene_10deg_1m()
-    };
+    let scene = Scene { sun_elevation_deg: 30.0, sun_azimuth_deg: 90.0, ..scene_10deg_1m() };
     let (w, h) = (72u32, 36u32);
     let img = crate::f64::render(&params, &scene, Projection::Panorama, w, h);
-    let (i, _) = img
-        .iter()
-        .enumerate()
-        .max_by(|a, b| a.1[0].total_cmp(&b.1[0]))
-        .expect("not empty");
+    let (i, _) = img.iter().enumerate().max_by(|a, b| a.1[0].total_cmp(&b.1[0])).expect("not empty");
     let (x, y) = (i as u32 % w, i as u32 / w);
     // Azimuth 90° is u = 0.25 (column 18), elevation 30° is v = 60/180 (row 12).
-    assert!(
-        (17..=18).contains(&x) && (11..=12).contains(&y),
-        "({x}, {y})"
-    );
+    assert!((17..=18).contains(&x) && (11..=12).contains(&y), "({x}, {y})");
 }
 
 #[test]
 fn sky_is_blue_and_ground_is_dim() {
     let params = FreemanParams::default();
-    let scene = Scene {
-        sun_elevation_deg: 45.0,
-        ..scene_10deg_1m()
-    };
+    let scene = Scene { sun_elevation_deg: 45.0, ..scene_10deg_1m() };
     let zenith = crate::f64::sky_color(&params, &scene, DVec3::Y);
     assert!(zenith.z > zenith.y && zenith.y > zenith.x, "{zenith}");
     let ground = crate::f64::sky_color(&params, &scene, DVec3::NEG_Y);
@@ -352,15 +276,8 @@ fn odd_inputs_do_not_panic() {
         FreemanParams::default().with_samples(0, 0),
         FreemanParams::default().with_samples(1, 1),
         FreemanParams::default().with_samples(-5, -3),
-        FreemanParams {
-            atmosphere_height: 0.1,
-            ..FreemanParams::default()
-        },
-        FreemanParams {
-            mie_g_forward: 1.0,
-            mie_albedo: 0.0,
-            ..FreemanParams::default()
-        },
+        FreemanParams { atmosphere_height: 0.1, ..FreemanParams::default() },
+        FreemanParams { mie_g_forward: 1.0, mie_albedo: 0.0, ..FreemanParams::default() },
     ];
     for params in &odd {
         let _ = crate::f32::render(params, &scene, Projection::Panorama, 8, 4);
@@ -369,38 +286,14 @@ fn odd_inputs_do_not_panic() {
     // Zero samples: no sky, but the ground is still lit (transmittance 1, no ambient).
     let zero = crate::f64::render(&odd[0], &scene, Projection::Panorama, 8, 4);
     assert!(zero.iter().all(|p| p.iter().all(|c| c.is_finite())));
-    assert!(
-        zero[..8].iter().all(|p| p[..3] == [0.0; 3]),
-        "upper row is black"
-    );
-    let nan_scene = Scene {
-        position: DVec3::NAN,
-        ..scene
-    };
+    assert!(zero[..8].iter().all(|p| p[..3] == [0.0; 3]), "upper row is black");
+    let nan_scene = Scene { position: DVec3::NAN, ..scene };
     // maxNum: a NaN altitude clamps to 0.5 m, as on the GPU.
     let a = crate::f64::sky_color(&FreemanParams::default(), &nan_scene, DVec3::Y);
-    let b = crate::f64::sky_color(
-        &FreemanParams::default(),
-        &Scene {
-            position: DVec3::ZERO,
-            ..scene
-        },
-        DVec3::Y,
-    );
+    let b = crate::f64::sky_color(&FreemanParams::default(), &Scene { position: DVec3::ZERO, ..scene }, DVec3::Y);
     assert_eq!(a, b);
-    assert!(
-        crate::f32::render(&FreemanParams::default(), &scene, Projection::Camera, 0, 7).is_empty()
-    );
-    assert!(
-        crate::f64::render(
-            &FreemanParams::default(),
-            &scene,
-            Projection::Panorama,
-            7,
-            0
-        )
-        .is_empty()
-    );
+    assert!(crate::f32::render(&FreemanParams::default(), &scene, Projection::Camera, 0, 7).is_empty());
+    assert!(crate::f64::render(&FreemanParams::default(), &scene, Projection::Panorama, 7, 0).is_empty());
 }
 
 #[test]
@@ -429,10 +322,7 @@ fn convergence_check_runs_small() {
     let report = convergence_check(
         &FreemanParams::default(),
         &scene_10deg_1m(),
-        &Converged {
-            view_samples: 48,
-            sun_samples: 16,
-        },
+        &Converged { view_samples: 48, sun_samples: 16 },
         8,
         4,
     );
@@ -459,14 +349,8 @@ fn convergence_at_default_counts() {
     let params = FreemanParams::default();
     let scene = scene_10deg_1m();
     for counts in [
-        Converged {
-            view_samples: 256,
-            sun_samples: 64,
-        },
-        Converged {
-            view_samples: 512,
-            sun_samples: 128,
-        },
+        Converged { view_samples: 256, sun_samples: 64 },
+        Converged { view_samples: 512, sun_samples: 128 },
         Converged::default(),
     ] {
         let r = convergence_check(&params, &scene, &counts, 32, 16);
@@ -481,14 +365,8 @@ fn convergence_at_default_counts() {
             r.mean_rel_change
         );
     }
-    let truth = crate::converged::render_converged(
-        &params,
-        &scene,
-        Projection::Panorama,
-        32,
-        16,
-        &Converged::default(),
-    );
+    let truth =
+        crate::converged::render_converged(&params, &scene, Projection::Panorama, 32, 16, &Converged::default());
     let shader = crate::f64::render(&params, &scene, Projection::Panorama, 32, 16);
     let (max, p99, mean) = summarize(&mut relative_changes(&shader, &truth, REL_FLOOR));
     println!("default 24/8 vs converged: max_rel={max:.3e} p99_rel={p99:.3e} mean_rel={mean:.3e}");
@@ -505,19 +383,12 @@ fn f32_vs_f64_survey() {
     let params = FreemanParams::default();
     for altitude in [1.0, 1000.0, 20000.0] {
         for elevation in [-6.0, -2.0, 0.0, 2.0, 10.0, 45.0, 90.0] {
-            let scene = Scene {
-                sun_elevation_deg: elevation,
-                position: DVec3::new(0.0, altitude, 0.0),
-                ..Scene::default()
-            };
+            let scene =
+                Scene { sun_elevation_deg: elevation, position: DVec3::new(0.0, altitude, 0.0), ..Scene::default() };
             let a = crate::f32::render(&params, &scene, Projection::Panorama, 128, 64);
             let b = crate::f64::render(&params, &scene, Projection::Panorama, 128, 64);
             let mut rel = relative_changes(&a, &b, REL_FLOOR);
-            let worst = rel
-                .iter()
-                .enumerate()
-                .max_by(|x, y| x.1.total_cmp(y.1))
-                .map_or(0, |(i, _)| i / 3);
+            let worst = rel.iter().enumerate().max_by(|x, y| x.1.total_cmp(y.1)).map_or(0, |(i, _)| i / 3);
             let (max, p99, mean) = summarize(&mut rel);
             println!(
                 "altitude {altitude} m, sun {elevation}°: max_rel={max:.2e} p99_rel={p99:.2e} \

@@ -10,8 +10,7 @@ pub const FREEMAN_SKY_WGSL: &str = include_str!(concat!(env!("OUT_DIR"), "/freem
 pub const FREEMAN_SKY_SPIRV: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/freeman_sky.spv"));
 
 /// The reflection JSON.
-pub const FREEMAN_SKY_REFLECTION: &str =
-    include_str!(concat!(env!("OUT_DIR"), "/freeman_sky.json"));
+pub const FREEMAN_SKY_REFLECTION: &str = include_str!(concat!(env!("OUT_DIR"), "/freeman_sky.json"));
 
 #[cfg(test)]
 mod tests {
@@ -31,10 +30,7 @@ mod tests {
         let uniforms = json["uniforms"].as_array().expect("uniforms");
         assert_eq!(FreemanSkyMaterial::FIELDS.len(), uniforms.len());
         for (name, offset) in FreemanSkyMaterial::FIELDS {
-            let u = uniforms
-                .iter()
-                .find(|u| u["name"] == *name)
-                .expect("the field is a uniform");
+            let u = uniforms.iter().find(|u| u["name"] == *name).expect("the field is a uniform");
             assert_eq!(Some(*offset as u64), u["offset"].as_u64(), "{name}");
         }
     }
@@ -47,15 +43,9 @@ mod tests {
         assert_eq!(m.view_samples, 24);
         assert_eq!(m.sun_samples, 8);
         let bytes: &[u8] = bytemuck::bytes_of(&m);
-        let offset = FreemanSkyMaterial::FIELDS
-            .iter()
-            .find(|(n, _)| *n == "planet_radius")
-            .map(|f| f.1)
-            .expect("field");
-        assert_eq!(
-            f32::from_le_bytes(bytes[offset..offset + 4].try_into().expect("4 bytes")),
-            6_360_000.0
-        );
+        let offset =
+            FreemanSkyMaterial::FIELDS.iter().find(|(n, _)| *n == "planet_radius").map(|f| f.1).expect("field");
+        assert_eq!(f32::from_le_bytes(bytes[offset..offset + 4].try_into().expect("4 bytes")), 6_360_000.0);
     }
 
     #[test]

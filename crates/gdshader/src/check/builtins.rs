@@ -30,18 +30,8 @@ pub struct BuiltinVar {
     pub writable: bool,
 }
 
-const fn var(
-    name: &'static str,
-    ty: &'static str,
-    scope: BuiltinScope,
-    writable: bool,
-) -> BuiltinVar {
-    BuiltinVar {
-        name,
-        ty,
-        scope,
-        writable,
-    }
+const fn var(name: &'static str, ty: &'static str, scope: BuiltinScope, writable: bool) -> BuiltinVar {
+    BuiltinVar { name, ty, scope, writable }
 }
 
 use BuiltinScope::{Global, SkyOnly};
@@ -104,12 +94,7 @@ pub fn builtin_var(name: &str) -> Option<&'static BuiltinVar> {
 }
 
 /// The render modes of sky shaders (reference §2; the docs list only the first three).
-pub const RENDER_MODES: &[&str] = &[
-    "use_half_res_pass",
-    "use_quarter_res_pass",
-    "disable_fog",
-    "use_debanding",
-];
+pub const RENDER_MODES: &[&str] = &["use_half_res_pass", "use_quarter_res_pass", "disable_fog", "use_debanding"];
 
 /// What a uniform hint may be put on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -378,25 +363,16 @@ pub fn builtin_function(name: &str) -> Option<&'static [Signature]> {
 
 fn build_table() -> HashMap<&'static str, Vec<Signature>> {
     let mut table: HashMap<&'static str, Vec<Signature>> = HashMap::new();
-    for line in FUNCTIONS
-        .lines()
-        .map(str::trim)
-        .filter(|l| !l.is_empty() && !l.starts_with('#'))
-    {
+    for line in FUNCTIONS.lines().map(str::trim).filter(|l| !l.is_empty() && !l.starts_with('#')) {
         let Some((ret, rest)) = line.split_once(' ') else {
             continue;
         };
         let Some((name, params)) = rest.split_once('(') else {
             continue;
         };
-        let params: Vec<&str> = params
-            .trim_end_matches(')')
-            .split(',')
-            .map(str::trim)
-            .filter(|p| !p.is_empty())
-            .collect();
-        let tokens =
-            || std::iter::once(ret).chain(params.iter().map(|p| p.trim_start_matches("out ")));
+        let params: Vec<&str> =
+            params.trim_end_matches(')').split(',').map(str::trim).filter(|p| !p.is_empty()).collect();
+        let tokens = || std::iter::once(ret).chain(params.iter().map(|p| p.trim_start_matches("out ")));
         let widths: &[u8] = if tokens().any(|t| t.starts_with("gen")) {
             &[1, 2, 3, 4]
         } else if tokens().any(|t| matches!(t, "vecF" | "vecI" | "vecU" | "vecB" | "mat")) {
@@ -424,10 +400,7 @@ fn build_table() -> HashMap<&'static str, Vec<Signature>> {
                 ) else {
                     continue;
                 };
-                table
-                    .entry(name)
-                    .or_default()
-                    .push(Signature { ret, params });
+                table.entry(name).or_default().push(Signature { ret, params });
             }
         }
     }
@@ -456,10 +429,7 @@ mod tests {
 
     #[test]
     fn every_line_of_the_function_table_parses() {
-        let lines = FUNCTIONS
-            .lines()
-            .filter(|l| !l.trim().is_empty() && !l.starts_with('#'))
-            .count();
+        let lines = FUNCTIONS.lines().filter(|l| !l.trim().is_empty() && !l.starts_with('#')).count();
         let total: usize = build_table().values().map(Vec::len).sum();
         // Each line yields at least one overload; generic lines yield three or four.
         assert!(total >= lines, "{total} overloads from {lines} lines");

@@ -96,15 +96,7 @@ impl fmt::Display for ValueDisplay<'_> {
                     if i > 0 {
                         f.write_str(", ")?;
                     }
-                    write!(
-                        f,
-                        "{}",
-                        ValueDisplay {
-                            value: item,
-                            ty: &elem,
-                            structs: self.structs
-                        }
-                    )?;
+                    write!(f, "{}", ValueDisplay { value: item, ty: &elem, structs: self.structs })?;
                 }
                 f.write_str(")")
             }
@@ -125,11 +117,7 @@ impl fmt::Display for ValueDisplay<'_> {
 /// Applies a unary operator to a constant.
 pub fn unary(op: UnaryOp, v: &ConstValue) -> Option<ConstValue> {
     if let ConstValue::Composite(items) = v {
-        return items
-            .iter()
-            .map(|i| unary(op, i))
-            .collect::<Option<Vec<_>>>()
-            .map(ConstValue::Composite);
+        return items.iter().map(|i| unary(op, i)).collect::<Option<Vec<_>>>().map(ConstValue::Composite);
     }
     Some(match (op, v) {
         (UnaryOp::Plus, v) => v.clone(),
@@ -149,13 +137,7 @@ fn wrap_i32(v: i64) -> i64 {
 
 /// Applies a binary operator to constants (component-wise for vectors, with scalar broadcast).
 /// Matrix products are not folded (`None`); the value is then simply unknown.
-pub fn binary(
-    op: BinaryOp,
-    a: &ConstValue,
-    b: &ConstValue,
-    a_ty: &Type,
-    b_ty: &Type,
-) -> Option<ConstValue> {
+pub fn binary(op: BinaryOp, a: &ConstValue, b: &ConstValue, a_ty: &Type, b_ty: &Type) -> Option<ConstValue> {
     use BinaryOp::*;
     if matches!(a_ty, Type::Matrix(_)) || matches!(b_ty, Type::Matrix(_)) {
         return None;
@@ -184,12 +166,8 @@ pub fn binary(
         (ConstValue::Float(x), ConstValue::Float(y)) => float_op(op, *x, *y),
         (ConstValue::Int(x), ConstValue::Int(y)) => int_op(op, *x, *y),
         (ConstValue::UInt(x), ConstValue::UInt(y)) => uint_op(op, *x, *y),
-        (ConstValue::Int(x), ConstValue::UInt(y)) if matches!(op, Shl | Shr) => {
-            int_op(op, *x, *y as i64)
-        }
-        (ConstValue::UInt(x), ConstValue::Int(y)) if matches!(op, Shl | Shr) => {
-            uint_op(op, *x, *y as u64)
-        }
+        (ConstValue::Int(x), ConstValue::UInt(y)) if matches!(op, Shl | Shr) => int_op(op, *x, *y as i64),
+        (ConstValue::UInt(x), ConstValue::Int(y)) if matches!(op, Shl | Shr) => uint_op(op, *x, *y as u64),
         (ConstValue::Bool(x), ConstValue::Bool(y)) => Some(ConstValue::Bool(match op {
             LogicalAnd => *x && *y,
             LogicalOr => *x || *y,

@@ -19,19 +19,11 @@ pub(super) struct ExprInfo {
 
 impl ExprInfo {
     fn runtime(ty: Type) -> Self {
-        Self {
-            ty,
-            constant: false,
-            value: None,
-        }
+        Self { ty, constant: false, value: None }
     }
 
     fn constant(ty: Type, value: Option<ConstValue>) -> Self {
-        Self {
-            ty,
-            constant: true,
-            value,
-        }
+        Self { ty, constant: true, value }
     }
 }
 
@@ -40,10 +32,9 @@ impl ExprInfo {
 fn is_int_literal(e: &Expr) -> bool {
     match &e.kind {
         ExprKind::IntLit(_) | ExprKind::UIntLit(_) => true,
-        ExprKind::Unary {
-            op: UnaryOp::Neg | UnaryOp::Plus,
-            operand,
-        } => matches!(operand.kind, ExprKind::IntLit(_) | ExprKind::UIntLit(_)),
+        ExprKind::Unary { op: UnaryOp::Neg | UnaryOp::Plus, operand } => {
+            matches!(operand.kind, ExprKind::IntLit(_) | ExprKind::UIntLit(_))
+        }
         _ => false,
     }
 }
@@ -83,10 +74,7 @@ impl Checker {
             if items.len() != *len as usize {
                 self.error(
                     codes::BAD_ARRAY,
-                    format!(
-                        "the array has {len} elements but the list gives {}",
-                        items.len()
-                    ),
+                    format!("the array has {len} elements but the list gives {}", items.len()),
                     init.span,
                     "",
                 );
@@ -108,20 +96,11 @@ impl Checker {
                 }
             }
             self.set_type(init, ty);
-            return ok.then(|| ExprInfo {
-                ty: ty.clone(),
-                constant,
-                value: values.map(ConstValue::Composite),
-            });
+            return ok.then(|| ExprInfo { ty: ty.clone(), constant, value: values.map(ConstValue::Composite) });
         }
         let info = self.expr(init)?;
         if info.ty != *ty {
-            self.mismatch(
-                init,
-                &info.ty,
-                ty,
-                "type mismatch: expected `{to}`, found `{from}`",
-            );
+            self.mismatch(init, &info.ty, ty, "type mismatch: expected `{to}`, found `{from}`");
             return None;
         }
         Some(info)
@@ -131,12 +110,7 @@ impl Checker {
     fn mismatch(&mut self, e: &Expr, from: &Type, to: &Type, template: &str) {
         let (f, t) = (self.type_name(from), self.type_name(to));
         let message = template.replace("{from}", &f).replace("{to}", &t);
-        let d = self.error(
-            codes::TYPE_MISMATCH,
-            message,
-            e.span,
-            format!("this is `{f}`"),
-        );
+        let d = self.error(codes::TYPE_MISMATCH, message, e.span, format!("this is `{f}`"));
         if from.scalar() == Some(Scalar::Int) && to.scalar() == Some(Scalar::Float) {
             d.diagnostic.notes.push(if is_int_literal(e) {
                 "Godot does not convert int to float implicitly: write a float literal such as `2.0`".into()
@@ -148,26 +122,14 @@ impl Checker {
 
     fn expr_kind(&mut self, e: &Expr) -> Option<ExprInfo> {
         match &e.kind {
-            ExprKind::IntLit(v) => Some(ExprInfo::constant(
-                Type::INT,
-                Some(ConstValue::Int(*v as i32 as i64)),
-            )),
-            ExprKind::UIntLit(v) => Some(ExprInfo::constant(
-                Type::UINT,
-                Some(ConstValue::UInt(u64::from(*v))),
-            )),
-            ExprKind::FloatLit(v) => {
-                Some(ExprInfo::constant(Type::FLOAT, Some(ConstValue::Float(*v))))
-            }
-            ExprKind::BoolLit(b) => {
-                Some(ExprInfo::constant(Type::BOOL, Some(ConstValue::Bool(*b))))
-            }
+            ExprKind::IntLit(v) => Some(ExprInfo::constant(Type::INT, Some(ConstValue::Int(*v as i32 as i64)))),
+            ExprKind::UIntLit(v) => Some(ExprInfo::constant(Type::UINT, Some(ConstValue::UInt(u64::from(*v))))),
+            ExprKind::FloatLit(v) => Some(ExprInfo::constant(Type::FLOAT, Some(ConstValue::Float(*v)))),
+            ExprKind::BoolLit(b) => Some(ExprInfo::constant(Type::BOOL, Some(ConstValue::Bool(*b)))),
             ExprKind::Error => None,
             ExprKind::Ident(id) => self.ident(id),
             ExprKind::Call { callee, args } => self.call(e, callee, args),
-            ExprKind::ArrayCtor { elem, size, args } => {
-                self.array_ctor(e, elem, size.as_deref(), args)
-            }
+            ExprKind::ArrayCtor { elem, size, args } => self.array_ctor(e, elem, size.as_deref(), args),
             ExprKind::InitList(_) => {
                 self.error(
                     codes::BAD_ARRAY,
@@ -186,12 +148,7 @@ impl Checker {
                 if !info.ty.is_numeric() {
                     let t = self.type_name(&info.ty);
                     let sym = if op.increment { "++" } else { "--" };
-                    self.error(
-                        codes::TYPE_MISMATCH,
-                        format!("`{sym}` needs a number, not `{t}`"),
-                        target.span,
-                        "",
-                    );
+                    self.error(codes::TYPE_MISMATCH, format!("`{sym}` needs a number, not `{t}`"), target.span, "");
                     return None;
                 }
                 self.assignable(target)?;
@@ -199,11 +156,7 @@ impl Checker {
             }
             ExprKind::Binary { op, lhs, rhs } => self.binary(e, *op, lhs, rhs),
             ExprKind::Assign { op, target, value } => self.assign(*op, target, value),
-            ExprKind::Ternary {
-                cond,
-                then,
-                otherwise,
-            } => {
+            ExprKind::Ternary { cond, then, otherwise } => {
                 let c = self.expr(cond);
                 let a = self.expr(then);
                 let b = self.expr(otherwise);
@@ -238,22 +191,14 @@ impl Checker {
                     Some(ConstValue::Bool(false)) => b.value,
                     _ => None,
                 };
-                Some(ExprInfo {
-                    ty: a.ty,
-                    constant,
-                    value: value.filter(|_| constant),
-                })
+                Some(ExprInfo { ty: a.ty, constant, value: value.filter(|_| constant) })
             }
         }
     }
 
     fn ident(&mut self, id: &ast::Ident) -> Option<ExprInfo> {
         if let Some(local) = self.scopes.iter().rev().find_map(|s| s.get(&id.name)) {
-            return Some(ExprInfo {
-                ty: local.ty.clone()?,
-                constant: local.is_const,
-                value: local.value.clone(),
-            });
+            return Some(ExprInfo { ty: local.ty.clone()?, constant: local.is_const, value: local.value.clone() });
         }
         if let Some(g) = self.globals.get(&id.name) {
             return match g {
@@ -303,27 +248,13 @@ impl Checker {
             return None;
         }
         if self.functions.contains_key(&id.name) || builtins::builtin_function(&id.name).is_some() {
-            self.error(
-                codes::TYPE_MISMATCH,
-                format!("`{}` is a function; call it with `(...)`", id.name),
-                id.span,
-                "",
-            );
+            self.error(codes::TYPE_MISMATCH, format!("`{}` is a function; call it with `(...)`", id.name), id.span, "");
             return None;
         }
-        let d = self.error(
-            codes::UNDECLARED,
-            format!("unknown identifier `{}`", id.name),
-            id.span,
-            "not declared here",
-        );
-        if let Some(b) = builtins::BUILTIN_VARS
-            .iter()
-            .find(|b| b.name.eq_ignore_ascii_case(&id.name))
-        {
-            d.diagnostic
-                .notes
-                .push(format!("the built-in is spelled `{}`", b.name));
+        let d =
+            self.error(codes::UNDECLARED, format!("unknown identifier `{}`", id.name), id.span, "not declared here");
+        if let Some(b) = builtins::BUILTIN_VARS.iter().find(|b| b.name.eq_ignore_ascii_case(&id.name)) {
+            d.diagnostic.notes.push(format!("the built-in is spelled `{}`", b.name));
         }
         None
     }
@@ -371,15 +302,10 @@ impl Checker {
                 if let Some(b) = builtins::builtin_var(&id.name)
                     && !b.writable
                 {
-                    self.error(
-                        codes::NOT_ASSIGNABLE,
-                        format!("built-in `{}` is read-only", b.name),
-                        target.span,
-                        "",
-                    )
-                    .diagnostic
-                    .notes
-                    .push("a sky shader writes only COLOR, ALPHA and FOG".into());
+                    self.error(codes::NOT_ASSIGNABLE, format!("built-in `{}` is read-only", b.name), target.span, "")
+                        .diagnostic
+                        .notes
+                        .push("a sky shader writes only COLOR, ALPHA and FOG".into());
                     return None;
                 }
                 Some(())
@@ -393,10 +319,7 @@ impl Checker {
                         if std::mem::replace(&mut seen[i], true) {
                             self.error(
                                 codes::NOT_ASSIGNABLE,
-                                format!(
-                                    "cannot assign to swizzle `.{}`: it repeats a component",
-                                    name.name
-                                ),
+                                format!("cannot assign to swizzle `.{}`: it repeats a component", name.name),
                                 name.span,
                                 "",
                             );
@@ -462,20 +385,11 @@ impl Checker {
                 UnaryOp::Not => "!",
                 UnaryOp::BitNot => "~",
             };
-            self.error(
-                codes::TYPE_MISMATCH,
-                format!("invalid operand `{t}` for unary `{sym}`"),
-                e.span,
-                "",
-            );
+            self.error(codes::TYPE_MISMATCH, format!("invalid operand `{t}` for unary `{sym}`"), e.span, "");
             return None;
         }
         let value = info.value.as_ref().and_then(|v| consteval::unary(op, v));
-        Some(ExprInfo {
-            ty: info.ty,
-            constant: info.constant,
-            value,
-        })
+        Some(ExprInfo { ty: info.ty, constant: info.constant, value })
     }
 
     /// The result type of `a op b`, following GLSL ES 3.0 without implicit conversions.
@@ -491,8 +405,7 @@ impl Checker {
                     _ if a == b => Some(a.clone()),
                     (Type::Scalar(_), Type::Vector(..) | Type::Matrix(_)) => Some(b.clone()),
                     (Type::Vector(..) | Type::Matrix(_), Type::Scalar(_)) => Some(a.clone()),
-                    (Type::Matrix(n), Type::Vector(_, m))
-                    | (Type::Vector(_, m), Type::Matrix(n))
+                    (Type::Matrix(n), Type::Vector(_, m)) | (Type::Vector(_, m), Type::Matrix(n))
                         if op == Mul && n == m =>
                     {
                         Some(Type::Vector(Scalar::Float, *n))
@@ -522,9 +435,9 @@ impl Checker {
                     _ => None,
                 }
             }
-            Less | Greater | LessEq | GreaterEq => (a == b
-                && matches!(a, Type::Scalar(Scalar::Int | Scalar::UInt | Scalar::Float)))
-            .then_some(Type::BOOL),
+            Less | Greater | LessEq | GreaterEq => {
+                (a == b && matches!(a, Type::Scalar(Scalar::Int | Scalar::UInt | Scalar::Float))).then_some(Type::BOOL)
+            }
             Eq | NotEq => (a == b && !a.is_opaque() && *a != Type::Void).then_some(Type::BOOL),
             LogicalAnd | LogicalOr => (*a == Type::BOOL && *b == Type::BOOL).then_some(Type::BOOL),
         }
@@ -548,7 +461,9 @@ impl Checker {
                 } else {
                     ""
                 };
-                d.diagnostic.notes.push(format!("Godot does not mix int and float in arithmetic; convert one side explicitly{literal}"));
+                d.diagnostic.notes.push(format!(
+                    "Godot does not mix int and float in arithmetic; convert one side explicitly{literal}"
+                ));
             }
             return None;
         };
@@ -557,11 +472,7 @@ impl Checker {
             (Some(x), Some(y)) if constant => consteval::binary(op, x, y, &a.ty, &b.ty),
             _ => None,
         };
-        Some(ExprInfo {
-            ty,
-            constant,
-            value,
-        })
+        Some(ExprInfo { ty, constant, value })
     }
 
     fn member(&mut self, base: &Expr, name: &ast::Ident) -> Option<ExprInfo> {
@@ -569,37 +480,25 @@ impl Checker {
         match &info.ty {
             Type::Vector(scalar, n) => {
                 let s = name.name.as_str();
-                let Some(set) = SWIZZLE_SETS
-                    .iter()
-                    .find(|set| s.chars().next().is_some_and(|c| set.contains(c)))
+                let Some(set) = SWIZZLE_SETS.iter().find(|set| s.chars().next().is_some_and(|c| set.contains(c)))
                 else {
-                    self.error(
-                        codes::BAD_MEMBER,
-                        format!("invalid swizzle `.{s}`"),
-                        name.span,
-                        "",
-                    )
-                    .diagnostic
-                    .notes
-                    .push("swizzles use the letters xyzw, rgba or stpq".into());
+                    self.error(codes::BAD_MEMBER, format!("invalid swizzle `.{s}`"), name.span, "")
+                        .diagnostic
+                        .notes
+                        .push("swizzles use the letters xyzw, rgba or stpq".into());
                     return None;
                 };
                 if let Some(other) = s.chars().find(|c| !set.contains(*c)) {
                     if SWIZZLE_SETS.iter().any(|set| set.contains(other)) {
                         self.error(
                             codes::BAD_MEMBER,
-                            format!(
-                                "Cannot combine symbols from different sets in expression '.{s}'."
-                            ),
+                            format!("Cannot combine symbols from different sets in expression '.{s}'."),
                             name.span,
                             "",
                         )
                         .diagnostic
                         .notes
-                        .push(format!(
-                            "use letters from one set only: {}",
-                            SWIZZLE_SETS.join(", ")
-                        ));
+                        .push(format!("use letters from one set only: {}", SWIZZLE_SETS.join(", ")));
                     } else {
                         self.error(
                             codes::BAD_MEMBER,
@@ -611,12 +510,7 @@ impl Checker {
                     return None;
                 }
                 if s.len() > 4 {
-                    self.error(
-                        codes::BAD_MEMBER,
-                        format!("swizzle `.{s}` has more than 4 components"),
-                        name.span,
-                        "",
-                    );
+                    self.error(codes::BAD_MEMBER, format!("swizzle `.{s}` has more than 4 components"), name.span, "");
                     return None;
                 }
                 let indices: Vec<usize> = s.chars().filter_map(|c| set.find(c)).collect();
@@ -634,23 +528,12 @@ impl Checker {
                 let ty = Type::vector_of(*scalar, indices.len() as u8);
                 let value = match &info.value {
                     Some(ConstValue::Composite(c)) => {
-                        let picked: Option<Vec<ConstValue>> =
-                            indices.iter().map(|&i| c.get(i).cloned()).collect();
-                        picked.map(|p| {
-                            if p.len() == 1 {
-                                p[0].clone()
-                            } else {
-                                ConstValue::Composite(p)
-                            }
-                        })
+                        let picked: Option<Vec<ConstValue>> = indices.iter().map(|&i| c.get(i).cloned()).collect();
+                        picked.map(|p| if p.len() == 1 { p[0].clone() } else { ConstValue::Composite(p) })
                     }
                     _ => None,
                 };
-                Some(ExprInfo {
-                    ty,
-                    constant: info.constant,
-                    value,
-                })
+                Some(ExprInfo { ty, constant: info.constant, value })
             }
             Type::Struct(id) => {
                 let member = self
@@ -659,11 +542,7 @@ impl Checker {
                     .and_then(|s| s.members.iter().find(|(m, _)| *m == name.name))
                     .map(|(_, t)| t.clone());
                 match member {
-                    Some(ty) => Some(ExprInfo {
-                        ty,
-                        constant: info.constant,
-                        value: None,
-                    }),
+                    Some(ty) => Some(ExprInfo { ty, constant: info.constant, value: None }),
                     None => {
                         let t = self.type_name(&info.ty);
                         self.error(
@@ -677,22 +556,12 @@ impl Checker {
                 }
             }
             Type::Array(..) if name.name == "length" => {
-                self.error(
-                    codes::BAD_MEMBER,
-                    "the array length is a method: write `.length()`",
-                    name.span,
-                    "",
-                );
+                self.error(codes::BAD_MEMBER, "the array length is a method: write `.length()`", name.span, "");
                 None
             }
             other => {
                 let t = self.type_name(other);
-                self.error(
-                    codes::BAD_MEMBER,
-                    format!("`{t}` has no member `{}`", name.name),
-                    name.span,
-                    "",
-                );
+                self.error(codes::BAD_MEMBER, format!("`{t}` has no member `{}`", name.name), name.span, "");
                 None
             }
         }
@@ -701,30 +570,19 @@ impl Checker {
     fn method(&mut self, base: &Expr, name: &ast::Ident, args: &[Expr]) -> Option<ExprInfo> {
         let info = self.expr(base)?;
         match (&info.ty, name.name.as_str()) {
-            (Type::Array(_, n), "length") if args.is_empty() => Some(ExprInfo::constant(
-                Type::INT,
-                Some(ConstValue::Int(i64::from(*n))),
-            )),
+            (Type::Array(_, n), "length") if args.is_empty() => {
+                Some(ExprInfo::constant(Type::INT, Some(ConstValue::Int(i64::from(*n)))))
+            }
             (Type::Array(..), "length") => {
-                self.error(
-                    codes::NO_MATCHING_OVERLOAD,
-                    "`.length()` takes no arguments",
-                    name.span,
-                    "",
-                );
+                self.error(codes::NO_MATCHING_OVERLOAD, "`.length()` takes no arguments", name.span, "");
                 None
             }
             (ty, m) => {
                 let t = self.type_name(ty);
-                self.error(
-                    codes::BAD_MEMBER,
-                    format!("`{t}` has no method `{m}`"),
-                    name.span,
-                    "",
-                )
-                .diagnostic
-                .notes
-                .push("the only method is `.length()` on arrays".into());
+                self.error(codes::BAD_MEMBER, format!("`{t}` has no method `{m}`"), name.span, "")
+                    .diagnostic
+                    .notes
+                    .push("the only method is `.length()` on arrays".into());
                 None
             }
         }
@@ -736,12 +594,7 @@ impl Checker {
         let (b, i) = (b?, i?);
         if !matches!(i.ty, Type::Scalar(Scalar::Int | Scalar::UInt)) {
             let t = self.type_name(&i.ty);
-            self.error(
-                codes::BAD_INDEX,
-                format!("an index must be `int` or `uint`, not `{t}`"),
-                index.span,
-                "",
-            );
+            self.error(codes::BAD_INDEX, format!("an index must be `int` or `uint`, not `{t}`"), index.span, "");
             return None;
         }
         let (elem, len) = match &b.ty {
@@ -750,20 +603,11 @@ impl Checker {
             Type::Array(t, n) => ((**t).clone(), *n),
             other => {
                 let t = self.type_name(other);
-                self.error(
-                    codes::BAD_INDEX,
-                    format!("values of type `{t}` cannot be indexed"),
-                    base.span,
-                    "",
-                );
+                self.error(codes::BAD_INDEX, format!("values of type `{t}` cannot be indexed"), base.span, "");
                 return None;
             }
         };
-        let at = i
-            .value
-            .as_ref()
-            .and_then(ConstValue::as_int)
-            .filter(|_| i.constant);
+        let at = i.value.as_ref().and_then(ConstValue::as_int).filter(|_| i.constant);
         if let Some(k) = at
             && (k < 0 || k >= i64::from(len))
         {
@@ -777,18 +621,12 @@ impl Checker {
             return None;
         }
         let value = match (&b.value, at) {
-            (Some(ConstValue::Composite(c)), Some(k))
-                if matches!(b.ty, Type::Vector(..) | Type::Array(..)) =>
-            {
+            (Some(ConstValue::Composite(c)), Some(k)) if matches!(b.ty, Type::Vector(..) | Type::Array(..)) => {
                 c.get(k as usize).cloned()
             }
             _ => None,
         };
-        Some(ExprInfo {
-            ty: elem,
-            constant: b.constant && i.constant,
-            value,
-        })
+        Some(ExprInfo { ty: elem, constant: b.constant && i.constant, value })
     }
 
     fn call(&mut self, e: &Expr, callee: &ast::Ident, args: &[Expr]) -> Option<ExprInfo> {
@@ -818,13 +656,7 @@ impl Checker {
         }
         let infos: Vec<Option<ExprInfo>> = args.iter().map(|a| self.expr(a)).collect();
         let infos: Vec<ExprInfo> = infos.into_iter().collect::<Option<_>>()?;
-        if let Some(local) = self
-            .scopes
-            .iter()
-            .rev()
-            .find_map(|s| s.get(&callee.name))
-            .map(|l| l.span)
-        {
+        if let Some(local) = self.scopes.iter().rev().find_map(|s| s.get(&callee.name)).map(|l| l.span) {
             let label = if self.functions.contains_key(&callee.name) {
                 "this variable hides the function"
             } else {
@@ -847,8 +679,7 @@ impl Checker {
             let found = overloads.iter().find(|f| {
                 f.params.len() == infos.len()
                     && f.params.iter().zip(&infos).zip(args).all(|((p, a), arg)| {
-                        p.0 == a.ty
-                            || (convert && is_int_literal(arg) && matches!(p.0, Type::Scalar(_)))
+                        p.0 == a.ty || (convert && is_int_literal(arg) && matches!(p.0, Type::Scalar(_)))
                     })
             });
             let Some(f) = found else {
@@ -858,11 +689,7 @@ impl Checker {
                         format!(
                             "{}({})",
                             callee.name,
-                            f.params
-                                .iter()
-                                .map(|p| self.type_name(&p.0))
-                                .collect::<Vec<_>>()
-                                .join(", ")
+                            f.params.iter().map(|p| self.type_name(&p.0)).collect::<Vec<_>>().join(", ")
                         )
                     })
                     .collect();
@@ -873,14 +700,11 @@ impl Checker {
                     e.span,
                     "",
                 );
-                d.diagnostic
-                    .notes
-                    .push(format!("expected {}", wanted.join(" or ")));
+                d.diagnostic.notes.push(format!("expected {}", wanted.join(" or ")));
                 if args.iter().any(is_int_literal) && !convert {
-                    d.diagnostic.notes.push(
-                        "int literals are not converted in calls of an overloaded user function"
-                            .into(),
-                    );
+                    d.diagnostic
+                        .notes
+                        .push("int literals are not converted in calls of an overloaded user function".into());
                 }
                 return None;
             };
@@ -901,12 +725,7 @@ impl Checker {
             || self.globals.contains_key(&callee.name)
             || builtins::builtin_var(&callee.name).is_some()
         {
-            self.error(
-                codes::NOT_CALLABLE,
-                format!("`{}` is not a function", callee.name),
-                callee.span,
-                "",
-            );
+            self.error(codes::NOT_CALLABLE, format!("`{}` is not a function", callee.name), callee.span, "");
         } else {
             self.error(
                 codes::UNDECLARED,
@@ -922,11 +741,7 @@ impl Checker {
     }
 
     fn arg_list(&self, infos: &[ExprInfo]) -> String {
-        infos
-            .iter()
-            .map(|i| self.type_name(&i.ty))
-            .collect::<Vec<_>>()
-            .join(", ")
+        infos.iter().map(|i| self.type_name(&i.ty)).collect::<Vec<_>>().join(", ")
     }
 
     /// Built-in call: an exact overload first, then one reached by converting int literals.
@@ -940,12 +755,13 @@ impl Checker {
     ) -> Option<ExprInfo> {
         // Godot tries overloads in table order and accepts the first one that fits after
         // converting int literals, so `abs(-3)` is `abs(float)`: float overloads come first.
-        let fits = |s: &&builtins::Signature| {
-            s.params.len() == infos.len()
-                && s.params.iter().zip(infos).zip(args).all(|((p, a), arg)| {
-                    p.0 == a.ty || (is_int_literal(arg) && matches!(p.0, Type::Scalar(_)) && !p.1)
-                })
-        };
+        let fits =
+            |s: &&builtins::Signature| {
+                s.params.len() == infos.len()
+                    && s.params.iter().zip(infos).zip(args).all(|((p, a), arg)| {
+                        p.0 == a.ty || (is_int_literal(arg) && matches!(p.0, Type::Scalar(_)) && !p.1)
+                    })
+            };
         let Some(sig) = sigs.iter().find(fits) else {
             let given = self.arg_list(infos);
             let mut shown: Vec<String> = Vec::new();
@@ -955,11 +771,7 @@ impl Checker {
                     callee.name,
                     s.params
                         .iter()
-                        .map(|p| format!(
-                            "{}{}",
-                            if p.1 { "out " } else { "" },
-                            self.type_name(&p.0)
-                        ))
+                        .map(|p| format!("{}{}", if p.1 { "out " } else { "" }, self.type_name(&p.0)))
                         .collect::<Vec<_>>()
                         .join(", ")
                 );
@@ -978,11 +790,7 @@ impl Checker {
             d.diagnostic.notes.push(format!(
                 "overloads include {}{}",
                 shown.join(", "),
-                if more > 0 {
-                    format!(" and {more} more")
-                } else {
-                    String::new()
-                }
+                if more > 0 { format!(" and {more} more") } else { String::new() }
             ));
             return None;
         };
@@ -995,23 +803,12 @@ impl Checker {
                 self.assignable(arg)?;
             }
         }
-        let constant =
-            infos.iter().all(|i| i.constant) && sig.params.iter().all(|p| !p.1 && !p.0.is_opaque());
-        Some(ExprInfo {
-            ty: sig.ret.clone(),
-            constant,
-            value: None,
-        })
+        let constant = infos.iter().all(|i| i.constant) && sig.params.iter().all(|p| !p.1 && !p.0.is_opaque());
+        Some(ExprInfo { ty: sig.ret.clone(), constant, value: None })
     }
 
     /// `T(args)` for scalars, vectors and matrices.
-    fn constructor(
-        &mut self,
-        e: &Expr,
-        callee: &ast::Ident,
-        ty: Type,
-        args: &[Expr],
-    ) -> Option<ExprInfo> {
+    fn constructor(&mut self, e: &Expr, callee: &ast::Ident, ty: Type, args: &[Expr]) -> Option<ExprInfo> {
         let infos: Vec<Option<ExprInfo>> = args.iter().map(|a| self.expr(a)).collect();
         let infos: Vec<ExprInfo> = infos.into_iter().collect::<Option<_>>()?;
         let constant = infos.iter().all(|i| i.constant);
@@ -1037,11 +834,7 @@ impl Checker {
         }
         // Int literals become the target's scalar type; other arguments keep theirs.
         let arg_scalar = |info: &ExprInfo, arg: &Expr| {
-            if is_int_literal(arg) {
-                Some(target)
-            } else {
-                info.ty.scalar()
-            }
+            if is_int_literal(arg) { Some(target) } else { info.ty.scalar() }
         };
         let single = infos.len() == 1;
         match &ty {
@@ -1100,27 +893,15 @@ impl Checker {
             _ => return fail(self, format!("`{}` has no constructor", callee.name)),
         }
         for (info, arg) in infos.iter().zip(args) {
-            if is_int_literal(arg)
-                && matches!(info.ty, Type::Scalar(_))
-                && !matches!(ty, Type::Scalar(_))
-            {
+            if is_int_literal(arg) && matches!(info.ty, Type::Scalar(_)) && !matches!(ty, Type::Scalar(_)) {
                 self.set_type(arg, &Type::Scalar(target));
             }
         }
         let value = constant.then(|| construct_value(&ty, &infos)).flatten();
-        Some(ExprInfo {
-            ty,
-            constant,
-            value,
-        })
+        Some(ExprInfo { ty, constant, value })
     }
 
-    fn struct_ctor(
-        &mut self,
-        e: &Expr,
-        id: super::types::StructId,
-        args: &[Expr],
-    ) -> Option<ExprInfo> {
+    fn struct_ctor(&mut self, e: &Expr, id: super::types::StructId, args: &[Expr]) -> Option<ExprInfo> {
         let info = self.structs.get(id.0 as usize)?.clone();
         // A `{…}` list may initialize an array member.
         let infos: Vec<Option<ExprInfo>> = args
@@ -1138,17 +919,10 @@ impl Checker {
                 .iter()
                 .zip(&infos)
                 .zip(args)
-                .all(|(((_, t), a), arg)| {
-                    *t == a.ty || (is_int_literal(arg) && matches!(t, Type::Scalar(_)))
-                });
+                .all(|(((_, t), a), arg)| *t == a.ty || (is_int_literal(arg) && matches!(t, Type::Scalar(_))));
         if !fits {
             let given = self.arg_list(&infos);
-            let wanted = info
-                .members
-                .iter()
-                .map(|(_, t)| self.type_name(t))
-                .collect::<Vec<_>>()
-                .join(", ");
+            let wanted = info.members.iter().map(|(_, t)| self.type_name(t)).collect::<Vec<_>>().join(", ");
             self.error(
                 codes::NO_MATCHING_OVERLOAD,
                 format!("cannot construct struct `{}` from ({given})", info.name),
@@ -1157,9 +931,7 @@ impl Checker {
             )
             .diagnostic
             .notes
-            .push(format!(
-                "expected ({wanted}), one value per member in order"
-            ));
+            .push(format!("expected ({wanted}), one value per member in order"));
             return None;
         }
         for ((_, t), arg) in info.members.iter().zip(args) {
@@ -1168,35 +940,24 @@ impl Checker {
             }
         }
         let constant = infos.iter().all(|i| i.constant);
-        Some(ExprInfo {
-            ty: Type::Struct(id),
-            constant,
-            value: None,
-        })
+        Some(ExprInfo { ty: Type::Struct(id), constant, value: None })
     }
 
     /// `T[N](args)` / `T[](args)`.
-    fn array_ctor(
-        &mut self,
-        e: &Expr,
-        elem: &ast::Ident,
-        size: Option<&Expr>,
-        args: &[Expr],
-    ) -> Option<ExprInfo> {
-        let elem_ty = match Type::from_name(&elem.name)
-            .or_else(|| self.struct_ids.get(&elem.name).map(|id| Type::Struct(*id)))
-        {
-            Some(t) if t != Type::Void && !t.is_opaque() => t,
-            _ => {
-                self.error(
-                    codes::UNKNOWN_TYPE,
-                    format!("`{}` is not a type that arrays can hold", elem.name),
-                    elem.span,
-                    "",
-                );
-                return None;
-            }
-        };
+    fn array_ctor(&mut self, e: &Expr, elem: &ast::Ident, size: Option<&Expr>, args: &[Expr]) -> Option<ExprInfo> {
+        let elem_ty =
+            match Type::from_name(&elem.name).or_else(|| self.struct_ids.get(&elem.name).map(|id| Type::Struct(*id))) {
+                Some(t) if t != Type::Void && !t.is_opaque() => t,
+                _ => {
+                    self.error(
+                        codes::UNKNOWN_TYPE,
+                        format!("`{}` is not a type that arrays can hold", elem.name),
+                        elem.span,
+                        "",
+                    );
+                    return None;
+                }
+            };
         let len = match size {
             Some(s) => self.array_len(s)?,
             None => args.len() as u32,
@@ -1204,10 +965,7 @@ impl Checker {
         if args.len() != len as usize {
             self.error(
                 codes::BAD_ARRAY,
-                format!(
-                    "the array has {len} elements but the constructor gives {}",
-                    args.len()
-                ),
+                format!("the array has {len} elements but the constructor gives {}", args.len()),
                 e.span,
                 "",
             );
@@ -1218,22 +976,13 @@ impl Checker {
         let mut ok = true;
         for arg in args {
             match self.expr(arg) {
-                Some(i)
-                    if i.ty == elem_ty
-                        || (is_int_literal(arg) && matches!(elem_ty, Type::Scalar(_))) =>
-                {
+                Some(i) if i.ty == elem_ty || (is_int_literal(arg) && matches!(elem_ty, Type::Scalar(_))) => {
                     if i.ty != elem_ty {
                         self.set_type(arg, &elem_ty);
                     }
                     constant &= i.constant;
                     match (
-                        i.value.and_then(|v| {
-                            if i.ty == elem_ty {
-                                Some(v)
-                            } else {
-                                v.convert(elem_ty.scalar()?)
-                            }
-                        }),
+                        i.value.and_then(|v| if i.ty == elem_ty { Some(v) } else { v.convert(elem_ty.scalar()?) }),
                         values.as_mut(),
                     ) {
                         (Some(v), Some(vs)) => vs.push(v),
@@ -1241,23 +990,14 @@ impl Checker {
                     }
                 }
                 Some(i) => {
-                    self.mismatch(
-                        arg,
-                        &i.ty,
-                        &elem_ty,
-                        "array element is `{from}` but the array holds `{to}`",
-                    );
+                    self.mismatch(arg, &i.ty, &elem_ty, "array element is `{from}` but the array holds `{to}`");
                     ok = false;
                 }
                 None => ok = false,
             }
         }
         let ty = Type::Array(Box::new(elem_ty), len);
-        ok.then(|| ExprInfo {
-            ty,
-            constant,
-            value: values.filter(|_| constant).map(ConstValue::Composite),
-        })
+        ok.then(|| ExprInfo { ty, constant, value: values.filter(|_| constant).map(ConstValue::Composite) })
     }
 }
 
@@ -1268,15 +1008,10 @@ fn construct_value(ty: &Type, infos: &[ExprInfo]) -> Option<ConstValue> {
     for i in infos {
         comps.extend(i.value.as_ref()?.scalars());
     }
-    let comps: Vec<ConstValue> = comps
-        .iter()
-        .map(|c| c.convert(target))
-        .collect::<Option<_>>()?;
+    let comps: Vec<ConstValue> = comps.iter().map(|c| c.convert(target)).collect::<Option<_>>()?;
     match ty {
         Type::Scalar(_) => comps.into_iter().next(),
-        Type::Vector(_, n) if comps.len() == 1 => {
-            Some(ConstValue::Composite(vec![comps[0].clone(); *n as usize]))
-        }
+        Type::Vector(_, n) if comps.len() == 1 => Some(ConstValue::Composite(vec![comps[0].clone(); *n as usize])),
         Type::Vector(..) => Some(ConstValue::Composite(comps)),
         _ => None,
     }

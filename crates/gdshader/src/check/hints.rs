@@ -8,12 +8,7 @@ use crate::diag::codes;
 use crate::parse::ast::{self, HintArg};
 
 impl Checker {
-    pub(super) fn hints(
-        &mut self,
-        u: &ast::Uniform,
-        ty: &Type,
-        default: Option<&ConstValue>,
-    ) -> Vec<HintInfo> {
+    pub(super) fn hints(&mut self, u: &ast::Uniform, ty: &Type, default: Option<&ConstValue>) -> Vec<HintInfo> {
         let mut out = Vec::new();
         let mut filter_seen: Option<&str> = None;
         let mut repeat_seen: Option<&str> = None;
@@ -25,12 +20,7 @@ impl Checker {
         for hint in &u.hints {
             let name = hint.name.name.as_str();
             let Some(&(_, target)) = HINTS.iter().find(|(n, _)| *n == name) else {
-                self.error(
-                    codes::BAD_HINT,
-                    format!("unknown hint `{name}`"),
-                    hint.name.span,
-                    "not a uniform hint",
-                );
+                self.error(codes::BAD_HINT, format!("unknown hint `{name}`"), hint.name.span, "not a uniform hint");
                 continue;
             };
             let fits = match target {
@@ -57,9 +47,7 @@ impl Checker {
                 let wants = match target {
                     HintTarget::IntOrFloat => "an `int` or `float` uniform",
                     HintTarget::Int => "an `int` uniform",
-                    HintTarget::ColorOrSampler | HintTarget::Color => {
-                        "a `vec3`, `vec4` or sampler uniform"
-                    }
+                    HintTarget::ColorOrSampler | HintTarget::Color => "a `vec3`, `vec4` or sampler uniform",
                     _ => "a sampler uniform",
                 };
                 self.error(
@@ -94,9 +82,7 @@ impl Checker {
                 }
                 repeat_seen = Some(name);
             }
-            if name == "color_conversion_disabled"
-                && !out.iter().any(|h: &HintInfo| h.name == "source_color")
-            {
+            if name == "color_conversion_disabled" && !out.iter().any(|h: &HintInfo| h.name == "source_color") {
                 self.error(
                     codes::BAD_HINT,
                     "Hint 'color_conversion_disabled' should be preceded by 'source_color'.",
@@ -106,12 +92,7 @@ impl Checker {
                 continue;
             }
             if out.iter().any(|h: &HintInfo| h.name == name) {
-                self.error(
-                    codes::BAD_HINT,
-                    format!("hint `{name}` is given twice"),
-                    hint.name.span,
-                    "repeated",
-                );
+                self.error(codes::BAD_HINT, format!("hint `{name}` is given twice"), hint.name.span, "repeated");
                 continue;
             }
             let args = match name {
@@ -119,40 +100,24 @@ impl Checker {
                 "hint_enum" => self.hint_enum(hint),
                 _ => {
                     if !hint.args.is_empty() {
-                        self.error(
-                            codes::BAD_HINT,
-                            format!("hint `{name}` takes no arguments"),
-                            hint.span,
-                            "",
-                        );
+                        self.error(codes::BAD_HINT, format!("hint `{name}` takes no arguments"), hint.span, "");
                     }
                     Some(Vec::new())
                 }
             };
             if let Some(args) = args {
-                out.push(HintInfo {
-                    name: name.to_string(),
-                    args,
-                });
+                out.push(HintInfo { name: name.to_string(), args });
             }
         }
         out
     }
 
     /// `hint_range(min, max[, step])`: numeric constants, min < max, step > 0, default inside.
-    fn hint_range(
-        &mut self,
-        hint: &ast::Hint,
-        default: Option<&ConstValue>,
-        u_is_int: bool,
-    ) -> Option<Vec<String>> {
+    fn hint_range(&mut self, hint: &ast::Hint, default: Option<&ConstValue>, u_is_int: bool) -> Option<Vec<String>> {
         if !(2..=3).contains(&hint.args.len()) {
             self.error(
                 codes::BAD_HINT,
-                format!(
-                    "`hint_range` takes 2 or 3 arguments (min, max[, step]), not {}",
-                    hint.args.len()
-                ),
+                format!("`hint_range` takes 2 or 3 arguments (min, max[, step]), not {}", hint.args.len()),
                 hint.span,
                 "",
             );
@@ -162,22 +127,12 @@ impl Checker {
         for arg in &hint.args {
             let HintArg::Expr(e) = arg else {
                 if let HintArg::Str(_, span) = arg {
-                    self.error(
-                        codes::BAD_HINT,
-                        "`hint_range` arguments must be numbers",
-                        *span,
-                        "a string",
-                    );
+                    self.error(codes::BAD_HINT, "`hint_range` arguments must be numbers", *span, "a string");
                 }
                 return None;
             };
             let info = self.expr(e)?;
-            match info
-                .value
-                .as_ref()
-                .and_then(ConstValue::as_f64)
-                .filter(|_| info.constant && info.ty.is_numeric())
-            {
+            match info.value.as_ref().and_then(ConstValue::as_f64).filter(|_| info.constant && info.ty.is_numeric()) {
                 Some(v) => values.push(v),
                 None => {
                     self.error(
@@ -194,26 +149,17 @@ impl Checker {
         // they produce is unusable or the default is clamped as soon as it is touched.
         let (min, max) = (values[0], values[1]);
         if min >= max {
-            self.warn(
-                format!("`hint_range` minimum {min} is not below its maximum {max}"),
-                hint.span,
-            );
+            self.warn(format!("`hint_range` minimum {min} is not below its maximum {max}"), hint.span);
         }
         if let Some(&step) = values.get(2)
             && step <= 0.0
         {
-            self.warn(
-                format!("`hint_range` step {step} is not greater than zero"),
-                hint.span,
-            );
+            self.warn(format!("`hint_range` step {step} is not greater than zero"), hint.span);
         }
         if let Some(d) = default.and_then(ConstValue::as_f64)
             && !(min.min(max)..=max.max(min)).contains(&d)
         {
-            self.warn(
-                format!("default value {d} is outside the hint range [{min}, {max}]"),
-                hint.span,
-            );
+            self.warn(format!("default value {d} is outside the hint range [{min}, {max}]"), hint.span);
         }
         // Written the way the uniform's type reads them: `0.0` for a float, `0` for an int.
         let ty = if u_is_int { Type::INT } else { Type::FLOAT };
@@ -221,17 +167,8 @@ impl Checker {
             values
                 .iter()
                 .map(|&v| {
-                    let value = if u_is_int {
-                        ConstValue::Int(v as i64)
-                    } else {
-                        ConstValue::Float(v)
-                    };
-                    ValueDisplay {
-                        value: &value,
-                        ty: &ty,
-                        structs: &[],
-                    }
-                    .to_string()
+                    let value = if u_is_int { ConstValue::Int(v as i64) } else { ConstValue::Float(v) };
+                    ValueDisplay { value: &value, ty: &ty, structs: &[] }.to_string()
                 })
                 .collect(),
         )
@@ -246,12 +183,7 @@ impl Checker {
 
     fn hint_enum(&mut self, hint: &ast::Hint) -> Option<Vec<String>> {
         if hint.args.is_empty() {
-            self.error(
-                codes::BAD_HINT,
-                "`hint_enum` needs at least one name",
-                hint.span,
-                "",
-            );
+            self.error(codes::BAD_HINT, "`hint_enum` needs at least one name", hint.span, "");
             return None;
         }
         let mut names = Vec::new();
@@ -259,7 +191,12 @@ impl Checker {
             match arg {
                 HintArg::Str(s, _) => names.push(s.clone()),
                 HintArg::Expr(e) => {
-                    self.error(codes::BAD_HINT, "`hint_enum` arguments must be strings, like `hint_enum(\"Low\", \"High\")`", e.span, "not a string");
+                    self.error(
+                        codes::BAD_HINT,
+                        "`hint_enum` arguments must be strings, like `hint_enum(\"Low\", \"High\")`",
+                        e.span,
+                        "not a string",
+                    );
                     return None;
                 }
             }

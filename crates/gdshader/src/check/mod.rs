@@ -204,8 +204,7 @@ impl Checker {
         span: Span,
         label: impl Into<String>,
     ) -> &mut SpannedDiagnostic {
-        self.diags
-            .push(SpannedDiagnostic::error(code, message, span, label));
+        self.diags.push(SpannedDiagnostic::error(code, message, span, label));
         let last = self.diags.len() - 1;
         &mut self.diags[last]
     }
@@ -240,10 +239,7 @@ impl Checker {
                     } else if name.name != "sky" {
                         self.error(
                             codes::SHADER_TYPE,
-                            format!(
-                                "gdsky translates sky shaders only, and this is a `{}` shader",
-                                name.name
-                            ),
+                            format!("gdsky translates sky shaders only, and this is a `{}` shader", name.name),
                             name.span,
                             "expected `sky`",
                         )
@@ -320,10 +316,7 @@ impl Checker {
                         )
                         .diagnostic
                         .notes
-                        .push(format!(
-                            "sky shaders accept {}",
-                            builtins::RENDER_MODES.join(", ")
-                        ));
+                        .push(format!("sky shaders accept {}", builtins::RENDER_MODES.join(", ")));
                     } else if self.render_modes.contains(&m.name) {
                         self.error(
                             codes::UNKNOWN_RENDER_MODE,
@@ -350,9 +343,7 @@ impl Checker {
                 .notes
                 .push("declare it `const`, make it a `uniform`, or move it into a function".into());
                 for d in &decl.declarators {
-                    self.global_spans
-                        .entry(d.name.name.clone())
-                        .or_insert(d.name.span);
+                    self.global_spans.entry(d.name.name.clone()).or_insert(d.name.span);
                 }
             }
             ItemKind::Function(f) => self.function(f),
@@ -364,38 +355,25 @@ impl Checker {
         if let Some(b) = builtins::builtin_var(&name.name) {
             self.error(
                 codes::REDECLARED,
-                format!(
-                    "`{}` is a built-in of sky shaders and cannot be redeclared",
-                    b.name
-                ),
+                format!("`{}` is a built-in of sky shaders and cannot be redeclared", b.name),
                 name.span,
                 "built-in name",
             );
             return false;
         }
         if Type::from_name(&name.name).is_some() {
-            self.error(
-                codes::REDECLARED,
-                format!("`{}` is a type name", name.name),
-                name.span,
-                "reserved",
-            );
+            self.error(codes::REDECLARED, format!("`{}` is a type name", name.name), name.span, "reserved");
             return false;
         }
-        if let Some(prev) = self.global_spans.get(&name.name).copied().or_else(|| {
-            self.functions
-                .get(&name.name)
-                .and_then(|f| f.first())
-                .map(|f| f.span)
-        }) {
-            self.error(
-                codes::REDECLARED,
-                format!("redefinition of `{}`", name.name),
-                name.span,
-                "declared again here",
-            )
-            .secondary
-            .push((prev, "first declared here".into()));
+        if let Some(prev) = self
+            .global_spans
+            .get(&name.name)
+            .copied()
+            .or_else(|| self.functions.get(&name.name).and_then(|f| f.first()).map(|f| f.span))
+        {
+            self.error(codes::REDECLARED, format!("redefinition of `{}`", name.name), name.span, "declared again here")
+                .secondary
+                .push((prev, "first declared here".into()));
             return false;
         }
         self.global_spans.insert(name.name.clone(), name.span);
@@ -416,12 +394,7 @@ impl Checker {
                 Some(Type::Scalar(Scalar::Bool) | Type::Vector(Scalar::Bool, _))
             )
         {
-            self.error(
-                codes::NOT_ALLOWED,
-                "The precision modifier cannot be used on boolean types.",
-                ty.span,
-                "",
-            );
+            self.error(codes::NOT_ALLOWED, "The precision modifier cannot be used on boolean types.", ty.span, "");
         }
         let base = match Type::from_name(&ty.name.name) {
             Some(t) => t,
@@ -443,12 +416,7 @@ impl Checker {
             [] => Some(base),
             [a] => {
                 if base == Type::Void {
-                    self.error(
-                        codes::BAD_ARRAY,
-                        "arrays of `void` are not allowed",
-                        a.span,
-                        "",
-                    );
+                    self.error(codes::BAD_ARRAY, "arrays of `void` are not allowed", a.span, "");
                     return None;
                 }
                 let len = match &a.size {
@@ -463,7 +431,12 @@ impl Checker {
                             return None;
                         }
                         _ => {
-                            self.error(codes::BAD_ARRAY, "an array declared with `[]` needs an initializer to give it a size", a.span, "size unknown");
+                            self.error(
+                                codes::BAD_ARRAY,
+                                "an array declared with `[]` needs an initializer to give it a size",
+                                a.span,
+                                "size unknown",
+                            );
                             return None;
                         }
                     },
@@ -471,12 +444,7 @@ impl Checker {
                 Some(Type::Array(Box::new(base), len))
             }
             [_, second, ..] => {
-                self.error(
-                    codes::BAD_ARRAY,
-                    "arrays of arrays are not supported",
-                    second.span,
-                    "second array suffix",
-                );
+                self.error(codes::BAD_ARRAY, "arrays of arrays are not supported", second.span, "second array suffix");
                 None
             }
         }
@@ -495,27 +463,12 @@ impl Checker {
             );
             return None;
         }
-        let Some(n) = info
-            .value
-            .as_ref()
-            .and_then(ConstValue::as_int)
-            .filter(|_| info.constant)
-        else {
-            self.error(
-                codes::NOT_CONSTANT,
-                "an array size must be a constant expression",
-                size.span,
-                "not constant",
-            );
+        let Some(n) = info.value.as_ref().and_then(ConstValue::as_int).filter(|_| info.constant) else {
+            self.error(codes::NOT_CONSTANT, "an array size must be a constant expression", size.span, "not constant");
             return None;
         };
         if n <= 0 {
-            self.error(
-                codes::BAD_ARRAY,
-                format!("an array size must be positive, not {n}"),
-                size.span,
-                "",
-            );
+            self.error(codes::BAD_ARRAY, format!("an array size must be positive, not {n}"), size.span, "");
             return None;
         }
         if n > MAX_ARRAY_LEN {
@@ -538,12 +491,7 @@ impl Checker {
             };
             if ty == Type::Void || ty.is_opaque() {
                 let t = self.type_name(&ty);
-                self.error(
-                    codes::NOT_ALLOWED,
-                    format!("a struct member cannot be of type `{t}`"),
-                    m.ty.span,
-                    "",
-                );
+                self.error(codes::NOT_ALLOWED, format!("a struct member cannot be of type `{t}`"), m.ty.span, "");
                 continue;
             }
             if members.iter().any(|(n, _)| *n == m.name.name) {
@@ -559,10 +507,7 @@ impl Checker {
         }
         if self.declare_global(&s.name, Global::Struct) {
             let id = StructId(self.structs.len() as u32);
-            self.structs.push(StructInfo {
-                name: s.name.name.clone(),
-                members,
-            });
+            self.structs.push(StructInfo { name: s.name.name.clone(), members });
             self.struct_ids.insert(s.name.name.clone(), id);
         }
     }
@@ -571,23 +516,16 @@ impl Checker {
         for d in &decl.declarators {
             let Some((ty, value)) = self.const_declarator(&decl.ty, d) else {
                 // Declare anyway, so later uses do not report it as undeclared.
-                self.global_spans
-                    .entry(d.name.name.clone())
-                    .or_insert(d.name.span);
+                self.global_spans.entry(d.name.name.clone()).or_insert(d.name.span);
                 continue;
             };
-            self.declarations
-                .insert(d.name.span, (ty.clone(), value.clone()));
+            self.declarations.insert(d.name.span, (ty.clone(), value.clone()));
             self.declare_global(&d.name, Global::Const { ty, value });
         }
     }
 
     /// Checks one `const` declarator: type, initializer present, of the same type and constant.
-    fn const_declarator(
-        &mut self,
-        ty: &ast::TypeRef,
-        d: &ast::Declarator,
-    ) -> Option<(Type, Option<ConstValue>)> {
+    fn const_declarator(&mut self, ty: &ast::TypeRef, d: &ast::Declarator) -> Option<(Type, Option<ConstValue>)> {
         let ty = self.resolve_type(ty, d.array.as_ref(), d.init.as_ref())?;
         let Some(init) = &d.init else {
             self.error(
@@ -624,27 +562,15 @@ impl Checker {
             );
         }
         let Some(ty) = self.resolve_type(&u.ty, u.array.as_ref(), u.default.as_ref()) else {
-            self.global_spans
-                .entry(u.name.name.clone())
-                .or_insert(u.name.span);
+            self.global_spans.entry(u.name.name.clone()).or_insert(u.name.span);
             return;
         };
         if ty == Type::Void || matches!(ty, Type::Struct(_)) {
             let t = self.type_name(&ty);
-            self.error(
-                codes::NOT_ALLOWED,
-                format!("a uniform cannot be of type `{t}`"),
-                u.ty.span,
-                "",
-            );
+            self.error(codes::NOT_ALLOWED, format!("a uniform cannot be of type `{t}`"), u.ty.span, "");
         }
         if u.scope == Some(ast::UniformScope::Global) && matches!(ty, Type::Array(..)) {
-            self.error(
-                codes::NOT_ALLOWED,
-                "global uniforms cannot be arrays",
-                u.name.span,
-                "",
-            );
+            self.error(codes::NOT_ALLOWED, "global uniforms cannot be arrays", u.name.span, "");
         }
         let mut default = None;
         if let Some(init) = &u.default {
@@ -656,10 +582,15 @@ impl Checker {
                     "remove this",
                 );
             } else if ty.is_opaque() {
-                self.error(codes::NOT_ALLOWED, "a sampler uniform cannot have a default value", init.span, "remove this")
-                    .diagnostic
-                    .notes
-                    .push("use `hint_default_white`, `hint_default_black` or `hint_default_transparent` instead".into());
+                self.error(
+                    codes::NOT_ALLOWED,
+                    "a sampler uniform cannot have a default value",
+                    init.span,
+                    "remove this",
+                )
+                .diagnostic
+                .notes
+                .push("use `hint_default_white`, `hint_default_black` or `hint_default_transparent` instead".into());
             } else if let Some(info) = self.initializer(init, &ty) {
                 if !info.constant {
                     self.error(
@@ -675,14 +606,7 @@ impl Checker {
         }
         let hints = self.hints(u, &ty, default.as_ref());
         let structs = self.struct_names();
-        let default_text = default.as_ref().map(|v| {
-            ValueDisplay {
-                value: v,
-                ty: &ty,
-                structs: &structs,
-            }
-            .to_string()
-        });
+        let default_text = default.as_ref().map(|v| ValueDisplay { value: v, ty: &ty, structs: &structs }.to_string());
         let type_name = self.type_name(&ty);
         if self.declare_global(&u.name, Global::Uniform { ty: ty.clone() }) {
             self.uniforms.push(UniformInfo {
@@ -708,102 +632,64 @@ impl Checker {
                 continue;
             };
             if ty == Type::Void {
-                self.error(
-                    codes::TYPE_MISMATCH,
-                    "a parameter cannot be `void`",
-                    p.ty.span,
-                    "",
-                );
+                self.error(codes::TYPE_MISMATCH, "a parameter cannot be `void`", p.ty.span, "");
                 continue;
             }
-            if builtins::builtin_var(&p.name.name).is_some()
-                || param_locals.contains_key(&p.name.name)
-            {
-                self.error(
-                    codes::REDECLARED,
-                    format!("redefinition of `{}`", p.name.name),
-                    p.name.span,
-                    "",
-                );
+            if builtins::builtin_var(&p.name.name).is_some() || param_locals.contains_key(&p.name.name) {
+                self.error(codes::REDECLARED, format!("redefinition of `{}`", p.name.name), p.name.span, "");
             }
             self.declarations.insert(p.name.span, (ty.clone(), None));
             params.push((ty.clone(), p.qualifier));
             let is_const = p.qualifier == ast::ParamQualifier::Const;
-            param_locals.insert(
-                p.name.name.clone(),
-                Local {
-                    ty: Some(ty),
-                    is_const,
-                    value: None,
-                    span: p.name.span,
-                },
-            );
+            param_locals.insert(p.name.name.clone(), Local { ty: Some(ty), is_const, value: None, span: p.name.span });
         }
         let ret = ret.unwrap_or(Type::Void);
         self.declarations.insert(f.name.span, (ret.clone(), None));
         let is_sky = f.name.name == "sky";
         if is_sky {
             if ret != Type::Void || !f.params.is_empty() {
-                self.error(codes::BAD_SKY_SIGNATURE, "`sky()` must be declared `void sky()`, with no parameters", f.name.span.to(f.params_span), "")
-                    .diagnostic
-                    .notes
-                    .push("Godot calls `void sky()` once per pixel; it reads inputs from built-ins and writes COLOR".into());
+                self.error(
+                    codes::BAD_SKY_SIGNATURE,
+                    "`sky()` must be declared `void sky()`, with no parameters",
+                    f.name.span.to(f.params_span),
+                    "",
+                )
+                .diagnostic
+                .notes
+                .push(
+                    "Godot calls `void sky()` once per pixel; it reads inputs from built-ins and writes COLOR".into(),
+                );
             }
             self.has_sky = true;
         }
         // Declare before the body so a call to itself is seen, and reported as recursion.
-        let info = FnInfo {
-            params: params.clone(),
-            ret: ret.clone(),
-            span: f.name.span,
-        };
+        let info = FnInfo { params: params.clone(), ret: ret.clone(), span: f.name.span };
         let clash = builtins::builtin_var(&f.name.name).is_some()
             || self.globals.contains_key(&f.name.name)
             || builtins::builtin_function(&f.name.name).is_some();
         let same = self.functions.get(&f.name.name).and_then(|o| {
-            o.iter()
-                .find(|g| {
-                    g.params
-                        .iter()
-                        .map(|p| &p.0)
-                        .eq(params.iter().map(|p| &p.0))
-                })
-                .map(|g| g.span)
+            o.iter().find(|g| g.params.iter().map(|p| &p.0).eq(params.iter().map(|p| &p.0))).map(|g| g.span)
         });
         if clash {
             self.error(
                 codes::REDECLARED,
-                format!(
-                    "`{}` is already defined and cannot be used as a function name",
-                    f.name.name
-                ),
+                format!("`{}` is already defined and cannot be used as a function name", f.name.name),
                 f.name.span,
                 "",
             );
         } else if let Some(prev) = same {
             self.error(
                 codes::REDECLARED,
-                format!(
-                    "function `{}` is already defined with these parameters",
-                    f.name.name
-                ),
+                format!("function `{}` is already defined with these parameters", f.name.name),
                 f.name.span,
                 "defined again here",
             )
             .secondary
             .push((prev, "first defined here".into()));
         } else {
-            self.functions
-                .entry(f.name.name.clone())
-                .or_default()
-                .push(info);
+            self.functions.entry(f.name.name.clone()).or_default().push(info);
         }
-        self.current = Some(FnCtx {
-            name: f.name.name.clone(),
-            ret: ret.clone(),
-            is_sky,
-            returns: 0,
-        });
+        self.current = Some(FnCtx { name: f.name.name.clone(), ret: ret.clone(), is_sky, returns: 0 });
         // Parameters share the body's top scope: redeclaring one there is a redefinition, while
         // a nested block may shadow it.
         self.scopes.push(param_locals);
@@ -817,10 +703,7 @@ impl Checker {
             let t = self.type_name(&ret);
             self.error(
                 codes::BAD_RETURN,
-                format!(
-                    "function `{}` returns `{t}` but has no `return` statement",
-                    f.name.name
-                ),
+                format!("function `{}` returns `{t}` but has no `return` statement", f.name.name),
                 f.name.span,
                 "",
             )

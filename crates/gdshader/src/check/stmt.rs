@@ -46,10 +46,7 @@ impl Checker {
             StmtKind::Expr(e) => {
                 self.expr(e);
             }
-            StmtKind::If {
-                branches,
-                otherwise,
-            } => {
+            StmtKind::If { branches, otherwise } => {
                 for (cond, body) in branches {
                     self.condition(cond, "if");
                     self.scoped_stmt(body);
@@ -58,19 +55,19 @@ impl Checker {
                     self.scoped_stmt(o);
                 }
             }
-            StmtKind::For {
-                init,
-                cond,
-                step,
-                body,
-            } => {
+            StmtKind::For { init, cond, step, body } => {
                 self.scopes.push(HashMap::new());
                 if let Some(i) = init {
                     if let StmtKind::Expr(e) = &i.kind {
-                        self.error(codes::SYNTAX, "the first part of a `for` must declare the loop variable", e.span, "not a declaration")
-                            .diagnostic
-                            .notes
-                            .push("Godot accepts `for (int i = 0; ...)` or an empty first part, not an assignment".into());
+                        self.error(
+                            codes::SYNTAX,
+                            "the first part of a `for` must declare the loop variable",
+                            e.span,
+                            "not a declaration",
+                        )
+                        .diagnostic
+                        .notes
+                        .push("Godot accepts `for (int i = 0; ...)` or an empty first part, not an assignment".into());
                     }
                     self.stmt(i);
                 }
@@ -100,29 +97,24 @@ impl Checker {
             StmtKind::Switch { selector, cases } => self.switch(selector, cases),
             StmtKind::Break => {
                 if self.jump_targets.is_empty() {
-                    self.error(
-                        codes::MISPLACED_JUMP,
-                        "`break` is only allowed inside a loop or `switch`",
-                        s.span,
-                        "",
-                    );
+                    self.error(codes::MISPLACED_JUMP, "`break` is only allowed inside a loop or `switch`", s.span, "");
                 }
             }
             StmtKind::Continue => match self.jump_targets.last() {
                 Some(JumpTarget::Loop) => {}
                 Some(JumpTarget::Switch) => {
-                    self.error(codes::MISPLACED_JUMP, "`continue` is not allowed inside a `switch`, even one inside a loop", s.span, "")
-                            .diagnostic
-                            .notes
-                            .push("Godot parses `case` bodies without `continue`; set a flag and `break` instead".into());
-                }
-                None => {
                     self.error(
                         codes::MISPLACED_JUMP,
-                        "`continue` is only allowed inside a loop",
+                        "`continue` is not allowed inside a `switch`, even one inside a loop",
                         s.span,
                         "",
-                    );
+                    )
+                    .diagnostic
+                    .notes
+                    .push("Godot parses `case` bodies without `continue`; set a flag and `break` instead".into());
+                }
+                None => {
+                    self.error(codes::MISPLACED_JUMP, "`continue` is only allowed inside a loop", s.span, "");
                 }
             },
             StmtKind::Return(value) => self.return_stmt(s, value.as_ref()),
@@ -142,18 +134,10 @@ impl Checker {
         };
         ctx.returns += 1;
         if ctx.is_sky {
-            self.error(
-                codes::BAD_RETURN,
-                "Using 'return' in the 'sky' processor function is incorrect.",
-                s.span,
-                "",
-            )
-            .diagnostic
-            .notes
-            .push(
-                "Godot rejects `return` in `sky()`; put the rest of the body under an `if` instead"
-                    .into(),
-            );
+            self.error(codes::BAD_RETURN, "Using 'return' in the 'sky' processor function is incorrect.", s.span, "")
+                .diagnostic
+                .notes
+                .push("Godot rejects `return` in `sky()`; put the rest of the body under an `if` instead".into());
             return;
         }
         let (ret, name) = (ctx.ret.clone(), ctx.name.clone());
@@ -170,12 +154,7 @@ impl Checker {
             None => {}
             Some(v) if ret == Type::Void => {
                 self.expr(v);
-                self.error(
-                    codes::BAD_RETURN,
-                    format!("`{name}` is `void` and cannot return a value"),
-                    v.span,
-                    "",
-                );
+                self.error(codes::BAD_RETURN, format!("`{name}` is `void` and cannot return a value"), v.span, "");
             }
             Some(v) => {
                 self.initializer(v, &ret);
@@ -204,12 +183,7 @@ impl Checker {
             match &case.value {
                 Some(v) => {
                     if let Some(info) = self.expr(v) {
-                        match info
-                            .value
-                            .as_ref()
-                            .and_then(ConstValue::as_int)
-                            .filter(|_| info.constant)
-                        {
+                        match info.value.as_ref().and_then(ConstValue::as_int).filter(|_| info.constant) {
                             None => {
                                 self.error(
                                     codes::BAD_SWITCH,
@@ -222,16 +196,11 @@ impl Checker {
                                 if sel_ty.as_ref().is_some_and(|t| *t != info.ty) {
                                     let (a, b) = (
                                         self.type_name(&info.ty),
-                                        sel_ty
-                                            .as_ref()
-                                            .map(|t| self.type_name(t))
-                                            .unwrap_or_default(),
+                                        sel_ty.as_ref().map(|t| self.type_name(t)).unwrap_or_default(),
                                     );
                                     self.error(
                                         codes::BAD_SWITCH,
-                                        format!(
-                                            "`case` label is `{a}` but the switch value is `{b}`"
-                                        ),
+                                        format!("`case` label is `{a}` but the switch value is `{b}`"),
                                         v.span,
                                         "",
                                     );
@@ -249,12 +218,7 @@ impl Checker {
                 }
                 None => {
                     if default_seen {
-                        self.error(
-                            codes::BAD_SWITCH,
-                            "a `switch` can have only one `default`",
-                            case.label_span,
-                            "",
-                        );
+                        self.error(codes::BAD_SWITCH, "a `switch` can have only one `default`", case.label_span, "");
                     }
                     default_seen = true;
                 }
@@ -271,24 +235,14 @@ impl Checker {
     fn local_decl(&mut self, decl: &ast::VarDecl) {
         for d in &decl.declarators {
             let declared = if decl.is_const {
-                self.const_declarator(&decl.ty, d)
-                    .map(|(ty, value)| (ty, value, true))
+                self.const_declarator(&decl.ty, d).map(|(ty, value)| (ty, value, true))
             } else {
                 self.local_var(&decl.ty, d).map(|ty| (ty, None, false))
             };
             // A failed declaration still declares the name, untyped, so its uses do not each
             // report it as unknown.
-            let (ty, value, is_const) =
-                declared.map_or((None, None, decl.is_const), |(t, v, c)| (Some(t), v, c));
-            self.declare_local(
-                &d.name,
-                Local {
-                    ty,
-                    is_const,
-                    value,
-                    span: d.name.span,
-                },
-            );
+            let (ty, value, is_const) = declared.map_or((None, None, decl.is_const), |(t, v, c)| (Some(t), v, c));
+            self.declare_local(&d.name, Local { ty, is_const, value, span: d.name.span });
         }
     }
 
@@ -296,12 +250,7 @@ impl Checker {
         let t = self.resolve_type(ty, d.array.as_ref(), d.init.as_ref())?;
         if t == Type::Void || t.is_opaque() {
             let n = self.type_name(&t);
-            self.error(
-                codes::NOT_ALLOWED,
-                format!("a local variable cannot be of type `{n}`"),
-                ty.span,
-                "",
-            );
+            self.error(codes::NOT_ALLOWED, format!("a local variable cannot be of type `{n}`"), ty.span, "");
             return None;
         }
         if let Some(init) = &d.init {
@@ -312,8 +261,7 @@ impl Checker {
 
     fn declare_local(&mut self, name: &ast::Ident, local: Local) {
         if let Some(ty) = &local.ty {
-            self.declarations
-                .insert(name.span, (ty.clone(), local.value.clone()));
+            self.declarations.insert(name.span, (ty.clone(), local.value.clone()));
         }
         // Godot checks the current block and the globals; an outer block's local may be shadowed.
         let clash = self
@@ -329,21 +277,11 @@ impl Checker {
                 "",
             );
         } else if Type::from_name(&name.name).is_some() {
-            self.error(
-                codes::REDECLARED,
-                format!("`{}` is a type name", name.name),
-                name.span,
-                "",
-            );
+            self.error(codes::REDECLARED, format!("`{}` is a type name", name.name), name.span, "");
         } else if let Some(prev) = clash {
-            self.error(
-                codes::REDECLARED,
-                format!("redefinition of `{}`", name.name),
-                name.span,
-                "declared again here",
-            )
-            .secondary
-            .push((prev, "first declared here".into()));
+            self.error(codes::REDECLARED, format!("redefinition of `{}`", name.name), name.span, "declared again here")
+                .secondary
+                .push((prev, "first declared here".into()));
         }
         if let Some(scope) = self.scopes.last_mut() {
             scope.insert(name.name.clone(), local);

@@ -9,34 +9,24 @@ struct NoIncludes;
 
 impl Loader for NoIncludes {
     fn load(&mut self, path: &Path) -> std::io::Result<Vec<u8>> {
-        Err(std::io::Error::new(
-            std::io::ErrorKind::NotFound,
-            path.display().to_string(),
-        ))
+        Err(std::io::Error::new(std::io::ErrorKind::NotFound, path.display().to_string()))
     }
 }
 
 fn checked(src: &str) -> (CheckedShader, String) {
     let text = format!("shader_type sky;\n{src}");
-    let out = check_source(
-        "test.gdshader",
-        text.clone().into_bytes(),
-        None,
-        &mut NoIncludes,
-    );
+    let out = check_source("test.gdshader", text.clone().into_bytes(), None, &mut NoIncludes);
     let rendered = crate::diag::render_human(&out.db, &out.diagnostics, false);
-    let shader = out
-        .shader
-        .unwrap_or_else(|| panic!("rejected:\n{rendered}"));
+    let shader = out.shader.unwrap_or_else(|| panic!("rejected:\n{rendered}"));
     (shader, text)
 }
 
 fn walk_expr<'a>(e: &'a Expr, out: &mut Vec<&'a Expr>) {
     out.push(e);
     match &e.kind {
-        ExprKind::Call { args, .. }
-        | ExprKind::InitList(args)
-        | ExprKind::ArrayCtor { args, .. } => args.iter().for_each(|a| walk_expr(a, out)),
+        ExprKind::Call { args, .. } | ExprKind::InitList(args) | ExprKind::ArrayCtor { args, .. } => {
+            args.iter().for_each(|a| walk_expr(a, out))
+        }
         ExprKind::Member { base, .. } => walk_expr(base, out),
         ExprKind::MethodCall { base, args, .. } => {
             walk_expr(base, out);
@@ -56,13 +46,9 @@ fn walk_expr<'a>(e: &'a Expr, out: &mut Vec<&'a Expr>) {
             walk_expr(target, out);
             walk_expr(value, out);
         }
-        ExprKind::Ternary {
-            cond,
-            then,
-            otherwise,
-        } => [cond, then, otherwise]
-            .into_iter()
-            .for_each(|x| walk_expr(x, out)),
+        ExprKind::Ternary { cond, then, otherwise } => {
+            [cond, then, otherwise].into_iter().for_each(|x| walk_expr(x, out))
+        }
         _ => {}
     }
 }
@@ -70,11 +56,7 @@ fn walk_expr<'a>(e: &'a Expr, out: &mut Vec<&'a Expr>) {
 fn walk_stmt<'a>(s: &'a Stmt, out: &mut Vec<&'a Expr>) {
     match &s.kind {
         StmtKind::Block(b) => b.stmts.iter().for_each(|s| walk_stmt(s, out)),
-        StmtKind::VarDecl(d) => d
-            .declarators
-            .iter()
-            .filter_map(|d| d.init.as_ref())
-            .for_each(|e| walk_expr(e, out)),
+        StmtKind::VarDecl(d) => d.declarators.iter().filter_map(|d| d.init.as_ref()).for_each(|e| walk_expr(e, out)),
         StmtKind::Expr(e) | StmtKind::Return(Some(e)) => walk_expr(e, out),
         _ => {}
     }
@@ -94,9 +76,7 @@ fn type_of(shader: &CheckedShader, text: &str, needle: &str, nth: usize) -> Stri
         .nth(nth)
         .unwrap_or_else(|| panic!("no expression `{needle}`"));
     let names = shader.struct_names();
-    shader.expr_types[e.id.0 as usize]
-        .as_ref()
-        .map_or("<none>".to_string(), |t| t.display(&names).to_string())
+    shader.expr_types[e.id.0 as usize].as_ref().map_or("<none>".to_string(), |t| t.display(&names).to_string())
 }
 
 #[test]
@@ -129,8 +109,7 @@ fn constants_fold_into_array_sizes_and_lengths() {
     );
     assert_eq!(type_of(&s, &text, "a.length()", 0), "int");
     assert_eq!(type_of(&s, &text, "{1.0, 2.0}", 0), "float[2]");
-    let (s, text) =
-        checked("void sky() { const int M = (7 << 2) % 5; float c[M + 1]; COLOR = vec3(c[0]); }");
+    let (s, text) = checked("void sky() { const int M = (7 << 2) % 5; float c[M + 1]; COLOR = vec3(c[0]); }");
     // (7 << 2) % 5 = 28 % 5 = 3.
     assert_eq!(type_of(&s, &text, "c", 0), "float[4]");
 }
@@ -151,9 +130,7 @@ fn swizzles_increments_and_array_returns_have_their_types() {
 
 #[test]
 fn builtins_used_are_recorded() {
-    let (s, _) = checked(
-        "float t() { return TIME; }\nvoid sky() { COLOR = EYEDIR * t() + LIGHT0_DIRECTION; }",
-    );
+    let (s, _) = checked("float t() { return TIME; }\nvoid sky() { COLOR = EYEDIR * t() + LIGHT0_DIRECTION; }");
     let used: Vec<&str> = s.builtins_used.iter().copied().collect();
     assert_eq!(used, ["COLOR", "EYEDIR", "LIGHT0_DIRECTION", "TIME"]);
 }

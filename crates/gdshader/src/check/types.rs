@@ -124,27 +124,17 @@ impl Type {
 
     /// A scalar (N = 1) or vector of `scalar`.
     pub fn vector_of(scalar: Scalar, n: u8) -> Type {
-        if n == 1 {
-            Type::Scalar(scalar)
-        } else {
-            Type::Vector(scalar, n)
-        }
+        if n == 1 { Type::Scalar(scalar) } else { Type::Vector(scalar, n) }
     }
 
     /// True for int, uint and float scalars, vectors and matrices.
     pub fn is_numeric(&self) -> bool {
-        matches!(
-            self.scalar(),
-            Some(Scalar::Int | Scalar::UInt | Scalar::Float)
-        )
+        matches!(self.scalar(), Some(Scalar::Int | Scalar::UInt | Scalar::Float))
     }
 
     /// True for int and uint scalars and vectors.
     pub fn is_integer(&self) -> bool {
-        matches!(
-            self,
-            Type::Scalar(Scalar::Int | Scalar::UInt) | Type::Vector(Scalar::Int | Scalar::UInt, _)
-        )
+        matches!(self, Type::Scalar(Scalar::Int | Scalar::UInt) | Type::Vector(Scalar::Int | Scalar::UInt, _))
     }
 
     /// True for samplers and types containing one (they cannot be copied around).
@@ -194,11 +184,7 @@ impl fmt::Display for TypeDisplay<'_> {
                 };
                 write!(f, "{}{base}", prefix(*s))
             }
-            Type::Struct(id) => f.write_str(
-                self.structs
-                    .get(id.0 as usize)
-                    .map_or("struct", String::as_str),
-            ),
+            Type::Struct(id) => f.write_str(self.structs.get(id.0 as usize).map_or("struct", String::as_str)),
             Type::Array(t, n) => write!(f, "{}[{n}]", t.display(self.structs)),
         }
     }

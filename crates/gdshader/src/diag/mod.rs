@@ -37,30 +37,19 @@ impl SourceDb {
     }
 
     /// Adds a file under a display `name`; `path` is where it was read from, if anywhere.
-    pub fn add(
-        &mut self,
-        name: impl Into<String>,
-        text: String,
-        path: Option<std::path::PathBuf>,
-    ) -> FileId {
+    pub fn add(&mut self, name: impl Into<String>, text: String, path: Option<std::path::PathBuf>) -> FileId {
         self.paths.push(path);
         FileId(self.files.add(name.into(), text))
     }
 
     /// The text of a file.
     pub fn text(&self, file: FileId) -> &str {
-        self.files
-            .get(file.0)
-            .map(|f| f.source().as_str())
-            .unwrap_or("")
+        self.files.get(file.0).map(|f| f.source().as_str()).unwrap_or("")
     }
 
     /// The display name of a file.
     pub fn name(&self, file: FileId) -> &str {
-        self.files
-            .get(file.0)
-            .map(|f| f.name().as_str())
-            .unwrap_or("")
+        self.files.get(file.0).map(|f| f.name().as_str()).unwrap_or("")
     }
 
     /// The path a file was read from, if it came from disk.
@@ -137,55 +126,23 @@ pub struct Diagnostic {
 impl Diagnostic {
     /// A new error with a code and message and no labels yet.
     pub fn error(code: &'static str, message: impl Into<String>) -> Self {
-        Self {
-            severity: Severity::Error,
-            code,
-            message: message.into(),
-            labels: Vec::new(),
-            notes: Vec::new(),
-        }
+        Self { severity: Severity::Error, code, message: message.into(), labels: Vec::new(), notes: Vec::new() }
     }
 
     /// A new warning with a code and message and no labels yet.
     pub fn warning(code: &'static str, message: impl Into<String>) -> Self {
-        Self {
-            severity: Severity::Warning,
-            code,
-            message: message.into(),
-            labels: Vec::new(),
-            notes: Vec::new(),
-        }
+        Self { severity: Severity::Warning, code, message: message.into(), labels: Vec::new(), notes: Vec::new() }
     }
 
     /// Adds the primary label.
-    pub fn with_primary(
-        mut self,
-        file: FileId,
-        range: Range<usize>,
-        message: impl Into<String>,
-    ) -> Self {
-        self.labels.push(Label {
-            file,
-            range,
-            message: message.into(),
-            primary: true,
-        });
+    pub fn with_primary(mut self, file: FileId, range: Range<usize>, message: impl Into<String>) -> Self {
+        self.labels.push(Label { file, range, message: message.into(), primary: true });
         self
     }
 
     /// Adds a secondary label.
-    pub fn with_secondary(
-        mut self,
-        file: FileId,
-        range: Range<usize>,
-        message: impl Into<String>,
-    ) -> Self {
-        self.labels.push(Label {
-            file,
-            range,
-            message: message.into(),
-            primary: false,
-        });
+    pub fn with_secondary(mut self, file: FileId, range: Range<usize>, message: impl Into<String>) -> Self {
+        self.labels.push(Label { file, range, message: message.into(), primary: false });
         self
     }
 
@@ -208,10 +165,7 @@ impl Diagnostic {
 
     /// The label the diagnostic is reported at: the first primary one, else the first.
     pub fn primary_label(&self) -> Option<&Label> {
-        self.labels
-            .iter()
-            .find(|l| l.primary)
-            .or_else(|| self.labels.first())
+        self.labels.iter().find(|l| l.primary).or_else(|| self.labels.first())
     }
 }
 
@@ -229,9 +183,7 @@ pub fn render_human(db: &SourceDb, diagnostics: &[Diagnostic], color: bool) -> S
         };
         if result.is_err() {
             // A label outside its file cannot be drawn; say it plainly rather than lose it.
-            out.extend_from_slice(
-                format!("{}[{}]: {}\n", severity_word(d.severity), d.code, d.message).as_bytes(),
-            );
+            out.extend_from_slice(format!("{}[{}]: {}\n", severity_word(d.severity), d.code, d.message).as_bytes());
         }
     }
     String::from_utf8_lossy(&out).into_owned()
@@ -256,11 +208,7 @@ fn to_codespan(db: &SourceDb, d: &Diagnostic) -> cs::Diagnostic<usize> {
             let text = db.text(l.file);
             let start = floor_char_boundary(text, l.range.start.min(text.len()));
             let end = floor_char_boundary(text, l.range.end.clamp(start, text.len()));
-            let style = if l.primary {
-                cs::LabelStyle::Primary
-            } else {
-                cs::LabelStyle::Secondary
-            };
+            let style = if l.primary { cs::LabelStyle::Primary } else { cs::LabelStyle::Secondary };
             cs::Label::new(style, l.file.0, start..end).with_message(l.message.clone())
         })
         .collect();
@@ -280,13 +228,7 @@ pub fn render_json(db: &SourceDb, diagnostics: &[Diagnostic]) -> String {
             Some(l) => {
                 let (line, column) = db.line_col(l.file, l.range.start);
                 let (end_line, end_column) = db.line_col(l.file, l.range.end);
-                (
-                    db.name(l.file).to_string(),
-                    line,
-                    column,
-                    end_line,
-                    end_column,
-                )
+                (db.name(l.file).to_string(), line, column, end_line, end_column)
             }
             None => (String::new(), 0, 0, 0, 0),
         };

@@ -22,13 +22,7 @@ pub fn build_shader(
     doc_comments: &[(usize, usize)],
     diags: &mut Vec<SpannedDiagnostic>,
 ) -> Shader {
-    let mut b = Builder {
-        text,
-        doc_comments,
-        diags,
-        next_id: 0,
-        group: Vec::new(),
-    };
+    let mut b = Builder { text, doc_comments, diags, next_id: 0, group: Vec::new() };
     let mut items = Vec::new();
     for pair in root.into_inner() {
         if pair.as_rule() == Rule::EOI {
@@ -36,11 +30,7 @@ pub fn build_shader(
         }
         items.push(b.item(pair));
     }
-    Shader {
-        items,
-        expr_count: b.next_id,
-        eof: Span::new(text.len(), text.len()),
-    }
+    Shader { items, expr_count: b.next_id, eof: Span::new(text.len(), text.len()) }
 }
 
 fn span_of(pair: &P<'_>) -> Span {
@@ -88,10 +78,7 @@ fn children<'i>(pair: P<'i>) -> impl Iterator<Item = P<'i>> {
 }
 
 fn ident(pair: P<'_>) -> Ident {
-    Ident {
-        name: pair.as_str().to_string(),
-        span: span_of(&pair),
-    }
+    Ident { name: pair.as_str().to_string(), span: span_of(&pair) }
 }
 
 fn precision(pair: &P<'_>) -> Precision {
@@ -110,27 +97,18 @@ impl Builder<'_> {
     }
 
     fn mk(&mut self, kind: ExprKind, span: Span) -> Expr {
-        Expr {
-            id: self.id(),
-            kind,
-            span,
-        }
+        Expr { id: self.id(), kind, span }
     }
 
     fn item(&mut self, pair: P<'_>) -> Item {
         let span = span_of(&pair);
         let kind = match pair.as_rule() {
-            Rule::shader_type_decl => ItemKind::ShaderType(
-                children(pair)
-                    .next()
-                    .map(ident)
-                    .unwrap_or_else(|| missing_ident(span)),
-            ),
+            Rule::shader_type_decl => {
+                ItemKind::ShaderType(children(pair).next().map(ident).unwrap_or_else(|| missing_ident(span)))
+            }
             Rule::render_mode_decl => ItemKind::RenderMode(children(pair).map(ident).collect()),
             Rule::group_uniforms_decl => {
-                let path: Vec<Ident> = children(pair)
-                    .flat_map(|p| p.into_inner().map(ident))
-                    .collect();
+                let path: Vec<Ident> = children(pair).flat_map(|p| p.into_inner().map(ident)).collect();
                 self.group = path.iter().map(|i| i.name.clone()).collect();
                 ItemKind::GroupUniforms(path)
             }
@@ -195,20 +173,12 @@ impl Builder<'_> {
     fn hint(&mut self, pair: P<'_>) -> Hint {
         let span = span_of(&pair);
         let mut inner = pair.into_inner();
-        let name = inner
-            .next()
-            .map(ident)
-            .unwrap_or_else(|| missing_ident(span));
+        let name = inner.next().map(ident).unwrap_or_else(|| missing_ident(span));
         let args = inner
             .map(|p| match p.as_rule() {
                 Rule::string => {
                     let s = p.as_str();
-                    HintArg::Str(
-                        s.get(1..s.len().saturating_sub(1))
-                            .unwrap_or("")
-                            .to_string(),
-                        span_of(&p),
-                    )
+                    HintArg::Str(s.get(1..s.len().saturating_sub(1)).unwrap_or("").to_string(), span_of(&p))
                 }
                 _ => HintArg::Expr(self.expr(p)),
             })
@@ -219,10 +189,7 @@ impl Builder<'_> {
     fn struct_decl(&mut self, pair: P<'_>) -> StructDecl {
         let span = span_of(&pair);
         let mut inner = children(pair);
-        let name = inner
-            .next()
-            .map(ident)
-            .unwrap_or_else(|| missing_ident(span));
+        let name = inner.next().map(ident).unwrap_or_else(|| missing_ident(span));
         let mut members = Vec::new();
         for m in inner {
             let mut precision_q = None;
@@ -261,11 +228,7 @@ impl Builder<'_> {
                 _ => {}
             }
         }
-        VarDecl {
-            is_const,
-            ty: ty.unwrap_or_else(|| missing_type(span)),
-            declarators,
-        }
+        VarDecl { is_const, ty: ty.unwrap_or_else(|| missing_type(span)), declarators }
     }
 
     fn declarator(&mut self, pair: P<'_>) -> Declarator {
@@ -281,28 +244,15 @@ impl Builder<'_> {
                 _ => {}
             }
         }
-        Declarator {
-            name: name.unwrap_or_else(|| missing_ident(span)),
-            array,
-            init,
-            span,
-        }
+        Declarator { name: name.unwrap_or_else(|| missing_ident(span)), array, init, span }
     }
 
     fn type_ref(&mut self, pair: P<'_>, precision: Option<Precision>) -> TypeRef {
         let span = span_of(&pair);
         let mut inner = pair.into_inner();
-        let name = inner
-            .next()
-            .map(ident)
-            .unwrap_or_else(|| missing_ident(span));
+        let name = inner.next().map(ident).unwrap_or_else(|| missing_ident(span));
         let array = inner.next().map(|a| self.array_size(a));
-        TypeRef {
-            precision,
-            name,
-            array,
-            span,
-        }
+        TypeRef { precision, name, array, span }
     }
 
     fn array_size(&mut self, pair: P<'_>) -> ArraySize {
@@ -327,8 +277,7 @@ impl Builder<'_> {
                 Rule::params => {
                     let s = span_of(&p);
                     // Widen to the parentheses around the list.
-                    params_span =
-                        Span::new((s.start as usize).saturating_sub(1), s.end as usize + 1);
+                    params_span = Span::new((s.start as usize).saturating_sub(1), s.end as usize + 1);
                     for param in children(p) {
                         params.push(self.param(param));
                     }
@@ -341,10 +290,7 @@ impl Builder<'_> {
             return_type: return_type.unwrap_or_else(|| missing_type(span)),
             name: name.unwrap_or_else(|| missing_ident(span)),
             params,
-            body: body.unwrap_or(Block {
-                stmts: Vec::new(),
-                span,
-            }),
+            body: body.unwrap_or(Block { stmts: Vec::new(), span }),
             params_span,
         }
     }
@@ -416,10 +362,7 @@ impl Builder<'_> {
                         }
                     }
                 }
-                StmtKind::If {
-                    branches,
-                    otherwise,
-                }
+                StmtKind::If { branches, otherwise }
             }
             Rule::for_stmt => {
                 let mut init = None;
@@ -428,36 +371,23 @@ impl Builder<'_> {
                 let mut body = None;
                 for p in children(pair) {
                     match p.as_rule() {
-                        Rule::for_init => {
-                            init = p.into_inner().next().map(|s| Box::new(self.stmt(s)))
-                        }
+                        Rule::for_init => init = p.into_inner().next().map(|s| Box::new(self.stmt(s))),
                         Rule::for_cond => cond = p.into_inner().next().map(|e| self.expr(e)),
                         Rule::for_step => step = p.into_inner().map(|e| self.expr(e)).collect(),
                         _ => body = Some(Box::new(self.stmt(p))),
                     }
                 }
-                StmtKind::For {
-                    init,
-                    cond,
-                    step,
-                    body: body.unwrap_or_else(|| empty_stmt(span)),
-                }
+                StmtKind::For { init, cond, step, body: body.unwrap_or_else(|| empty_stmt(span)) }
             }
             Rule::while_stmt => {
                 let mut inner = children(pair);
                 let cond = self.expr_or_error(inner.next(), span);
-                let body = inner
-                    .next()
-                    .map(|s| Box::new(self.stmt(s)))
-                    .unwrap_or_else(|| empty_stmt(span));
+                let body = inner.next().map(|s| Box::new(self.stmt(s))).unwrap_or_else(|| empty_stmt(span));
                 StmtKind::While { cond, body }
             }
             Rule::do_stmt => {
                 let mut inner = children(pair);
-                let body = inner
-                    .next()
-                    .map(|s| Box::new(self.stmt(s)))
-                    .unwrap_or_else(|| empty_stmt(span));
+                let body = inner.next().map(|s| Box::new(self.stmt(s))).unwrap_or_else(|| empty_stmt(span));
                 let cond = self.expr_or_error(inner.next(), span);
                 StmtKind::DoWhile { body, cond }
             }
@@ -488,11 +418,7 @@ impl Builder<'_> {
             value = children(label).next().map(|e| self.expr(e));
         }
         let body = inner.map(|s| self.stmt(s)).collect();
-        SwitchCase {
-            value,
-            label_span,
-            body,
-        }
+        SwitchCase { value, label_span, body }
     }
 
     fn expr_or_error(&mut self, pair: Option<P<'_>>, span: Span) -> Expr {
@@ -548,12 +474,7 @@ impl Builder<'_> {
         }
     }
 
-    fn reduce(
-        &mut self,
-        operands: &mut Vec<(Expr, usize)>,
-        ops: &mut Vec<(Infix, Span)>,
-        too_deep: &mut bool,
-    ) {
+    fn reduce(&mut self, operands: &mut Vec<(Expr, usize)>, ops: &mut Vec<(Infix, Span)>, too_deep: &mut bool) {
         let Some((op, op_span)) = ops.pop() else {
             return;
         };
@@ -567,27 +488,15 @@ impl Builder<'_> {
         let span = lhs.span.to(rhs.span);
         let mut depth = 1 + ld.max(rd);
         let kind = match op {
-            Infix::Binary(op) => ExprKind::Binary {
-                op,
-                lhs: Box::new(lhs),
-                rhs: Box::new(rhs),
-            },
-            Infix::Assign(op) => ExprKind::Assign {
-                op,
-                target: Box::new(lhs),
-                value: Box::new(rhs),
-            },
+            Infix::Binary(op) => ExprKind::Binary { op, lhs: Box::new(lhs), rhs: Box::new(rhs) },
+            Infix::Assign(op) => ExprKind::Assign { op, target: Box::new(lhs), value: Box::new(rhs) },
             Infix::Ternary(mid) => {
                 let (then, md) = match mid {
                     Some(m) => *m,
                     None => (self.mk(ExprKind::Error, op_span), 1),
                 };
                 depth = depth.max(1 + md);
-                ExprKind::Ternary {
-                    cond: Box::new(lhs),
-                    then: Box::new(then),
-                    otherwise: Box::new(rhs),
-                }
+                ExprKind::Ternary { cond: Box::new(lhs), then: Box::new(then), otherwise: Box::new(rhs) }
             }
         };
         let e = self.mk(kind, span);
@@ -626,71 +535,32 @@ impl Builder<'_> {
             let span = span_of(&p);
             match p.as_rule() {
                 Rule::prefix_op => prefixes.push((p.as_str().to_string(), span)),
-                Rule::post_inc
-                | Rule::post_dec
-                | Rule::member
-                | Rule::method_call
-                | Rule::index => {
+                Rule::post_inc | Rule::post_dec | Rule::member | Rule::method_call | Rule::index => {
                     let Some((base, depth)) = current.take() else {
                         continue;
                     };
                     let full = base.span.to(span);
                     let (kind, extra) = match p.as_rule() {
                         Rule::post_inc | Rule::post_dec => {
-                            let op = IncDec {
-                                increment: p.as_rule() == Rule::post_inc,
-                                prefix: false,
-                            };
-                            (
-                                ExprKind::IncDec {
-                                    op,
-                                    target: Box::new(base),
-                                },
-                                0,
-                            )
+                            let op = IncDec { increment: p.as_rule() == Rule::post_inc, prefix: false };
+                            (ExprKind::IncDec { op, target: Box::new(base) }, 0)
                         }
                         Rule::member => {
-                            let name = p
-                                .into_inner()
-                                .next()
-                                .map(ident)
-                                .unwrap_or_else(|| missing_ident(span));
-                            (
-                                ExprKind::Member {
-                                    base: Box::new(base),
-                                    name,
-                                },
-                                0,
-                            )
+                            let name = p.into_inner().next().map(ident).unwrap_or_else(|| missing_ident(span));
+                            (ExprKind::Member { base: Box::new(base), name }, 0)
                         }
                         Rule::method_call => {
                             let mut inner = p.into_inner();
-                            let name = inner
-                                .next()
-                                .map(ident)
-                                .unwrap_or_else(|| missing_ident(span));
+                            let name = inner.next().map(ident).unwrap_or_else(|| missing_ident(span));
                             let (args, ad) = inner.next().map(|a| self.args(a)).unwrap_or_default();
-                            (
-                                ExprKind::MethodCall {
-                                    base: Box::new(base),
-                                    name,
-                                    args,
-                                },
-                                ad,
-                            )
+                            (ExprKind::MethodCall { base: Box::new(base), name, args }, ad)
                         }
                         _ => {
                             let (index, id) = match p.into_inner().next() {
                                 Some(e) => self.expr_depth(e),
                                 None => (self.mk(ExprKind::Error, span), 1),
                             };
-                            (
-                                ExprKind::Index {
-                                    base: Box::new(base),
-                                    index: Box::new(index),
-                                },
-                                id,
-                            )
+                            (ExprKind::Index { base: Box::new(base), index: Box::new(index) }, id)
                         }
                     };
                     let e = self.mk(kind, full);
@@ -707,29 +577,13 @@ impl Builder<'_> {
             let (operand, depth) = current;
             let full = span.to(operand.span);
             let kind = match op.as_str() {
-                "++" | "--" => ExprKind::IncDec {
-                    op: IncDec {
-                        increment: op == "++",
-                        prefix: true,
-                    },
-                    target: Box::new(operand),
-                },
-                "-" => ExprKind::Unary {
-                    op: UnaryOp::Neg,
-                    operand: Box::new(operand),
-                },
-                "+" => ExprKind::Unary {
-                    op: UnaryOp::Plus,
-                    operand: Box::new(operand),
-                },
-                "!" => ExprKind::Unary {
-                    op: UnaryOp::Not,
-                    operand: Box::new(operand),
-                },
-                _ => ExprKind::Unary {
-                    op: UnaryOp::BitNot,
-                    operand: Box::new(operand),
-                },
+                "++" | "--" => {
+                    ExprKind::IncDec { op: IncDec { increment: op == "++", prefix: true }, target: Box::new(operand) }
+                }
+                "-" => ExprKind::Unary { op: UnaryOp::Neg, operand: Box::new(operand) },
+                "+" => ExprKind::Unary { op: UnaryOp::Plus, operand: Box::new(operand) },
+                "!" => ExprKind::Unary { op: UnaryOp::Not, operand: Box::new(operand) },
+                _ => ExprKind::Unary { op: UnaryOp::BitNot, operand: Box::new(operand) },
             };
             let e = self.mk(kind, full);
             current = self.limit_depth(e, depth + 1, &mut too_deep);
@@ -757,13 +611,7 @@ impl Builder<'_> {
                     Ok(kind) => kind,
                     Err((message, note)) => {
                         self.diags.push(
-                            SpannedDiagnostic::error(
-                                codes::BAD_LITERAL,
-                                message,
-                                span,
-                                "invalid number",
-                            )
-                            .note(note),
+                            SpannedDiagnostic::error(codes::BAD_LITERAL, message, span, "invalid number").note(note),
                         );
                         ExprKind::Error
                     }
@@ -776,11 +624,7 @@ impl Builder<'_> {
                 None => (self.mk(ExprKind::Error, span), 1),
             },
             Rule::init_list => {
-                let (args, d) = pair
-                    .into_inner()
-                    .next()
-                    .map(|a| self.args(a))
-                    .unwrap_or_default();
+                let (args, d) = pair.into_inner().next().map(|a| self.args(a)).unwrap_or_default();
                 (self.mk(ExprKind::InitList(args), span), d + 1)
             }
             Rule::named => {
@@ -795,11 +639,7 @@ impl Builder<'_> {
                         (self.mk(ExprKind::Ident(name), span), 1)
                     }
                     Some(tail) if tail.as_rule() == Rule::call_tail => {
-                        let (args, d) = tail
-                            .into_inner()
-                            .next()
-                            .map(|a| self.args(a))
-                            .unwrap_or_default();
+                        let (args, d) = tail.into_inner().next().map(|a| self.args(a)).unwrap_or_default();
                         (self.mk(ExprKind::Call { callee: name, args }, span), d + 1)
                     }
                     Some(tail) => {
@@ -812,11 +652,7 @@ impl Builder<'_> {
                                 _ => {}
                             }
                         }
-                        let kind = ExprKind::ArrayCtor {
-                            elem: name,
-                            size,
-                            args: args.0,
-                        };
+                        let kind = ExprKind::ArrayCtor { elem: name, size, args: args.0 };
                         (self.mk(kind, span), args.1 + 1)
                     }
                 }
@@ -893,11 +729,7 @@ fn drop_iteratively(e: Expr) {
         match e.kind {
             ExprKind::Binary { lhs, rhs, .. } => stack.extend([*lhs, *rhs]),
             ExprKind::Assign { target, value, .. } => stack.extend([*target, *value]),
-            ExprKind::Ternary {
-                cond,
-                then,
-                otherwise,
-            } => stack.extend([*cond, *then, *otherwise]),
+            ExprKind::Ternary { cond, then, otherwise } => stack.extend([*cond, *then, *otherwise]),
             ExprKind::Unary { operand, .. } => stack.push(*operand),
             ExprKind::IncDec { target, .. } => stack.push(*target),
             ExprKind::Member { base, .. } => stack.push(*base),
@@ -906,35 +738,24 @@ fn drop_iteratively(e: Expr) {
                 stack.push(*base);
                 stack.extend(args);
             }
-            ExprKind::Call { args, .. }
-            | ExprKind::InitList(args)
-            | ExprKind::ArrayCtor { args, .. } => stack.extend(args),
+            ExprKind::Call { args, .. } | ExprKind::InitList(args) | ExprKind::ArrayCtor { args, .. } => {
+                stack.extend(args)
+            }
             _ => {}
         }
     }
 }
 
 fn missing_ident(span: Span) -> Ident {
-    Ident {
-        name: String::new(),
-        span,
-    }
+    Ident { name: String::new(), span }
 }
 
 fn missing_type(span: Span) -> TypeRef {
-    TypeRef {
-        precision: None,
-        name: missing_ident(span),
-        array: None,
-        span,
-    }
+    TypeRef { precision: None, name: missing_ident(span), array: None, span }
 }
 
 fn empty_stmt(span: Span) -> Box<Stmt> {
-    Box::new(Stmt {
-        kind: StmtKind::Empty,
-        span,
-    })
+    Box::new(Stmt { kind: StmtKind::Empty, span })
 }
 
 /// Strips `/**`, `*/` and leading `*` decoration from a doc comment.
@@ -948,14 +769,8 @@ fn clean_doc(raw: &str) -> String {
             t.strip_prefix('*').map(str::trim_start).unwrap_or(t)
         })
         .collect();
-    let first = lines
-        .iter()
-        .position(|l| !l.is_empty())
-        .unwrap_or(lines.len());
-    let last = lines
-        .iter()
-        .rposition(|l| !l.is_empty())
-        .map_or(first, |i| i + 1);
+    let first = lines.iter().position(|l| !l.is_empty()).unwrap_or(lines.len());
+    let last = lines.iter().rposition(|l| !l.is_empty()).map_or(first, |i| i + 1);
     lines[first..last.max(first)].join("\n")
 }
 
@@ -977,18 +792,10 @@ pub(crate) fn parse_number(s: &str) -> Result<ExprKind, (String, String)> {
         }
         let trimmed = digits.trim_start_matches('0');
         if trimmed.len() > 8 {
-            return err(
-                format!("hexadecimal literal `{s}` does not fit in 32 bits"),
-                "the largest is 0xFFFFFFFF",
-            );
+            return err(format!("hexadecimal literal `{s}` does not fit in 32 bits"), "the largest is 0xFFFFFFFF");
         }
-        let value = u32::from_str_radix(if trimmed.is_empty() { "0" } else { trimmed }, 16)
-            .unwrap_or(u32::MAX);
-        return Ok(if unsigned {
-            ExprKind::UIntLit(value)
-        } else {
-            ExprKind::IntLit(value)
-        });
+        let value = u32::from_str_radix(if trimmed.is_empty() { "0" } else { trimmed }, 16).unwrap_or(u32::MAX);
+        return Ok(if unsigned { ExprKind::UIntLit(value) } else { ExprKind::IntLit(value) });
     }
     let b = s.as_bytes();
     let mut i = 0;
@@ -1008,10 +815,7 @@ pub(crate) fn parse_number(s: &str) -> Result<ExprKind, (String, String)> {
         frac_digits = digits(&mut i);
     }
     if int_digits == 0 && frac_digits == 0 {
-        return err(
-            format!("invalid number `{s}`"),
-            "a number needs at least one digit",
-        );
+        return err(format!("invalid number `{s}`"), "a number needs at least one digit");
     }
     let mut has_exp = false;
     if i < b.len() && (b[i] == b'e' || b[i] == b'E') {
@@ -1033,25 +837,17 @@ pub(crate) fn parse_number(s: &str) -> Result<ExprKind, (String, String)> {
     match suffix {
         "" | "f" | "F" if is_float => match body.parse::<f64>() {
             Ok(v) => Ok(ExprKind::FloatLit(v)),
-            Err(_) => err(
-                format!("invalid float literal `{s}`"),
-                "write a float like `1.0`, `.5` or `1e5`",
-            ),
+            Err(_) => err(format!("invalid float literal `{s}`"), "write a float like `1.0`, `.5` or `1e5`"),
         },
         "f" | "F" => err(
             format!("the `f` suffix needs a decimal point or an exponent: `{s}`"),
             "write `2.0` or `2.0f` for a float; Godot rejects `2f`",
         ),
         "" | "u" | "U" if !is_float => match body.parse::<u64>() {
-            Ok(v) if v <= u64::from(u32::MAX) => Ok(if suffix.is_empty() {
-                ExprKind::IntLit(v as u32)
-            } else {
-                ExprKind::UIntLit(v as u32)
-            }),
-            _ => err(
-                format!("integer literal `{s}` does not fit in 32 bits"),
-                "the largest is 4294967295",
-            ),
+            Ok(v) if v <= u64::from(u32::MAX) => {
+                Ok(if suffix.is_empty() { ExprKind::IntLit(v as u32) } else { ExprKind::UIntLit(v as u32) })
+            }
+            _ => err(format!("integer literal `{s}` does not fit in 32 bits"), "the largest is 4294967295"),
         },
         "u" | "U" => err(
             format!("a float literal cannot have the `u` suffix: `{s}`"),

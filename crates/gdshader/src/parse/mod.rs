@@ -48,31 +48,13 @@ pub struct SpannedDiagnostic {
 
 impl SpannedDiagnostic {
     /// An error at `span`.
-    pub fn error(
-        code: &'static str,
-        message: impl Into<String>,
-        span: Span,
-        label: impl Into<String>,
-    ) -> Self {
-        Self {
-            diagnostic: Diagnostic::error(code, message),
-            primary: (span, label.into()),
-            secondary: Vec::new(),
-        }
+    pub fn error(code: &'static str, message: impl Into<String>, span: Span, label: impl Into<String>) -> Self {
+        Self { diagnostic: Diagnostic::error(code, message), primary: (span, label.into()), secondary: Vec::new() }
     }
 
     /// A warning at `span`.
-    pub fn warning(
-        code: &'static str,
-        message: impl Into<String>,
-        span: Span,
-        label: impl Into<String>,
-    ) -> Self {
-        Self {
-            diagnostic: Diagnostic::warning(code, message),
-            primary: (span, label.into()),
-            secondary: Vec::new(),
-        }
+    pub fn warning(code: &'static str, message: impl Into<String>, span: Span, label: impl Into<String>) -> Self {
+        Self { diagnostic: Diagnostic::warning(code, message), primary: (span, label.into()), secondary: Vec::new() }
     }
 
     /// Adds a note.
@@ -125,21 +107,14 @@ fn error_offset(err: &pest::error::Error<Rule>) -> usize {
 /// brackets before the error. When that does not fail at the same place (the error began in an
 /// earlier item), the whole text is re-parsed.
 fn syntax_error(text: &str, pos: usize, item_starts: &[usize]) -> SpannedDiagnostic {
-    let start = item_starts
-        .iter()
-        .rev()
-        .copied()
-        .find(|&s| s <= pos)
-        .unwrap_or(0);
+    let start = item_starts.iter().rev().copied().find(|&s| s <= pos).unwrap_or(0);
     let detailed = |from: usize| {
         pest::set_error_detail(true);
         let result = GdParser::parse(Rule::shader, &text[from..]);
         pest::set_error_detail(false);
         result.err().map(|e| (from, e))
     };
-    let found = detailed(start)
-        .filter(|(from, e)| from + error_offset(e) == pos)
-        .or_else(|| detailed(0));
+    let found = detailed(start).filter(|(from, e)| from + error_offset(e) == pos).or_else(|| detailed(0));
     let Some((from, err)) = found else {
         return SpannedDiagnostic::error(codes::SYNTAX, "syntax error", Span::new(pos, pos), "");
     };
@@ -147,15 +122,8 @@ fn syntax_error(text: &str, pos: usize, item_starts: &[usize]) -> SpannedDiagnos
         pest::error::ErrorVariant::ParsingError { positives, .. } => positives.clone(),
         pest::error::ErrorVariant::CustomError { .. } => Vec::new(),
     };
-    let tokens: Vec<String> = err
-        .parse_attempts()
-        .map(|a| {
-            a.expected_tokens()
-                .iter()
-                .map(ToString::to_string)
-                .collect()
-        })
-        .unwrap_or_default();
+    let tokens: Vec<String> =
+        err.parse_attempts().map(|a| a.expected_tokens().iter().map(ToString::to_string).collect()).unwrap_or_default();
     positives.dedup();
     rules::describe(text, from + error_offset(&err), &positives, &tokens)
 }

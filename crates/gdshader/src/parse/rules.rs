@@ -11,8 +11,8 @@ fn english(rule: Rule) -> Option<&'static str> {
     Some(match rule {
         EOI => "the end of the file",
         ident | declarator_name | group_path => "a name",
-        number | bool_lit | prefix_op | operand | expr | paren | named | call_tail
-        | array_ctor_tail | init_list | args => "an expression",
+        number | bool_lit | prefix_op | operand | expr | paren | named | call_tail | array_ctor_tail | init_list
+        | args => "an expression",
         infix_op | ternary_mid => "an operator",
         post_inc | post_dec | member | method_call | index => return None,
         string => "a string",
@@ -21,12 +21,13 @@ fn english(rule: Rule) -> Option<&'static str> {
         param | params | param_qualifier => "a parameter",
         array_size => "`[`",
         block => "`{`",
-        if_stmt | for_stmt | while_stmt | do_stmt | switch_stmt | break_stmt | continue_stmt
-        | return_stmt | discard_stmt | local_const_decl | local_var_decl | expr_stmt
-        | empty_stmt | else_if | else_clause => "a statement",
+        if_stmt | for_stmt | while_stmt | do_stmt | switch_stmt | break_stmt | continue_stmt | return_stmt
+        | discard_stmt | local_const_decl | local_var_decl | expr_stmt | empty_stmt | else_if | else_clause => {
+            "a statement"
+        }
         switch_case | case_label => "`case` or `default`",
-        shader_type_decl | render_mode_decl | group_uniforms_decl | uniform_decl | struct_decl
-        | global_const_decl | function_def | global_var_decl | stray_semicolon => "a declaration",
+        shader_type_decl | render_mode_decl | group_uniforms_decl | uniform_decl | struct_decl | global_const_decl
+        | function_def | global_var_decl | stray_semicolon => "a declaration",
         struct_member => "a struct member",
         kw_shader_type => "a declaration",
         kw_render_mode => "a declaration",
@@ -60,18 +61,12 @@ fn english(rule: Rule) -> Option<&'static str> {
 /// Operator tokens: listed one by one they drown the useful alternatives, so they are said as
 /// "an operator".
 const OPERATOR_TOKENS: &[&str] = &[
-    "<<=", ">>=", "<<", ">>", "<=", ">=", "==", "!=", "&&", "||", "+=", "-=", "*=", "/=", "%=",
-    "&=", "|=", "^=", "<", ">", "+", "-", "*", "/", "%", "&", "|", "^", "?", "++", "--", ".", "!",
-    "~", "=",
+    "<<=", ">>=", "<<", ">>", "<=", ">=", "==", "!=", "&&", "||", "+=", "-=", "*=", "/=", "%=", "&=", "|=", "^=", "<",
+    ">", "+", "-", "*", "/", "%", "&", "|", "^", "?", "++", "--", ".", "!", "~", "=",
 ];
 
 /// Builds the syntax error at byte `pos` from the rules and literal tokens pest expected there.
-pub fn describe(
-    text: &str,
-    pos: usize,
-    positives: &[Rule],
-    tokens: &[String],
-) -> SpannedDiagnostic {
+pub fn describe(text: &str, pos: usize, positives: &[Rule], tokens: &[String]) -> SpannedDiagnostic {
     let mut expected: Vec<String> = Vec::new();
     let mut add = |s: String| {
         if !expected.contains(&s) {
@@ -116,9 +111,7 @@ pub fn describe(
         _ => format!("expected {}, found {}", join_or(&expected, 5), found.1),
     };
     // A missing `;` or `)` belongs at the end of what came before, not at the next line's token.
-    let closer_missing = expected
-        .first()
-        .is_some_and(|e| e == "`;`" || e == "`)`" || e == "`,`");
+    let closer_missing = expected.first().is_some_and(|e| e == "`;`" || e == "`)`" || e == "`,`");
     let before = text[..pos].trim_end().len();
     if closer_missing && text[before..pos].contains('\n') {
         let what = expected[0].clone();
@@ -130,10 +123,9 @@ pub fn describe(
         )
         .secondary(found.0, "next token");
     }
-    notes.into_iter().fold(
-        SpannedDiagnostic::error(codes::SYNTAX, message, found.0, "unexpected here"),
-        SpannedDiagnostic::note,
-    )
+    notes
+        .into_iter()
+        .fold(SpannedDiagnostic::error(codes::SYNTAX, message, found.0, "unexpected here"), SpannedDiagnostic::note)
 }
 
 /// Notes for mistakes people make coming from GLSL or other Godot shader types.
@@ -141,9 +133,7 @@ fn hints_for(text: &str, pos: usize, found: &str) -> Vec<&'static str> {
     let prev = text[..pos].chars().next_back();
     match found {
         "`^`" if prev == Some('^') => vec!["Godot has no `^^` operator; for bools write `a != b`"],
-        "`varying`" => vec![
-            "sky shaders have no varyings; Godot allows them in spatial and canvas_item shaders only",
-        ],
+        "`varying`" => vec!["sky shaders have no varyings; Godot allows them in spatial and canvas_item shaders only"],
         "`#`" => vec!["a directive must start its own line"],
         _ => Vec::new(),
     }
@@ -164,16 +154,12 @@ fn found_token(text: &str, pos: usize) -> (Span, String) {
         return (Span::new(pos, pos), "the end of the file".to_string());
     };
     let len = if first.is_ascii_alphanumeric() || first == '_' {
-        rest.find(|c: char| !(c.is_ascii_alphanumeric() || c == '_' || c == '.'))
-            .unwrap_or(rest.len())
+        rest.find(|c: char| !(c.is_ascii_alphanumeric() || c == '_' || c == '.')).unwrap_or(rest.len())
     } else {
         first.len_utf8()
     };
     let token = &rest[..len];
-    let desc = if first.is_ascii_graphic() {
-        format!("`{token}`")
-    } else {
-        format!("character U+{:04X}", first as u32)
-    };
+    let desc =
+        if first.is_ascii_graphic() { format!("`{token}`") } else { format!("character U+{:04X}", first as u32) };
     (Span::new(pos, pos + len), desc)
 }

@@ -25,10 +25,7 @@ pub fn prescan(text: &str, diags: &mut Vec<SpannedDiagnostic>) -> Scanned {
     let bytes = text.as_bytes();
     let mut doc_comments = Vec::new();
     let mut item_starts = vec![0];
-    let mut frames: Vec<Frame> = vec![Frame {
-        closer: 0,
-        pending_controls: 0,
-    }];
+    let mut frames: Vec<Frame> = vec![Frame { closer: 0, pending_controls: 0 }];
     let mut depth = 0usize;
     let mut bad_chars: Option<(usize, usize)> = None; // (first offset, count)
     let mut i = 0;
@@ -63,22 +60,15 @@ pub fn prescan(text: &str, diags: &mut Vec<SpannedDiagnostic>) -> Scanned {
                     b'{' => b'}',
                     _ => b':',
                 };
-                frames.push(Frame {
-                    closer,
-                    pending_controls: 0,
-                });
+                frames.push(Frame { closer, pending_controls: 0 });
                 depth += 1;
                 if depth > MAX_NESTING {
                     diags.push(nesting_error(i));
-                    return Scanned {
-                        doc_comments,
-                        item_starts,
-                    };
+                    return Scanned { doc_comments, item_starts };
                 }
             }
             b')' | b']' | b'}' | b':' => {
-                let closes =
-                    frames.len() > 1 && frames.last().is_some_and(|f| f.closer == c || c != b':');
+                let closes = frames.len() > 1 && frames.last().is_some_and(|f| f.closer == c || c != b':');
                 if closes && let Some(frame) = frames.pop() {
                     depth -= 1 + frame.pending_controls;
                 }
@@ -107,19 +97,14 @@ pub fn prescan(text: &str, diags: &mut Vec<SpannedDiagnostic>) -> Scanned {
                 while i < bytes.len() && (bytes[i].is_ascii_alphanumeric() || bytes[i] == b'_') {
                     i += 1;
                 }
-                if matches!(
-                    &text[start..i],
-                    "if" | "else" | "for" | "while" | "do" | "switch"
-                ) && let Some(frame) = frames.last_mut()
+                if matches!(&text[start..i], "if" | "else" | "for" | "while" | "do" | "switch")
+                    && let Some(frame) = frames.last_mut()
                 {
                     frame.pending_controls += 1;
                     depth += 1;
                     if depth > MAX_NESTING {
                         diags.push(nesting_error(start));
-                        return Scanned {
-                            doc_comments,
-                            item_starts,
-                        };
+                        return Scanned { doc_comments, item_starts };
                     }
                 }
                 continue;
@@ -153,10 +138,7 @@ pub fn prescan(text: &str, diags: &mut Vec<SpannedDiagnostic>) -> Scanned {
         }
         diags.push(d);
     }
-    Scanned {
-        doc_comments,
-        item_starts,
-    }
+    Scanned { doc_comments, item_starts }
 }
 
 fn nesting_error(at: usize) -> SpannedDiagnostic {
@@ -170,10 +152,7 @@ fn nesting_error(at: usize) -> SpannedDiagnostic {
 }
 
 fn memchr_newline(bytes: &[u8], from: usize) -> usize {
-    bytes[from..]
-        .iter()
-        .position(|&b| b == b'\n')
-        .map_or(bytes.len(), |p| from + p)
+    bytes[from..].iter().position(|&b| b == b'\n').map_or(bytes.len(), |p| from + p)
 }
 
 fn find_comment_end(bytes: &[u8], from: usize) -> usize {

@@ -6,12 +6,8 @@ fn expr_of(src: &str) -> ast::Expr {
     let text = format!("shader_type sky;\nvoid sky() {{ {src}; }}");
     let (shader, diags) = parse(&text);
     assert!(diags.is_empty(), "{diags:?}");
-    let ItemKind::Function(f) = &shader.items[1].kind else {
-        panic!("no function")
-    };
-    let StmtKind::Expr(e) = &f.body.stmts[0].kind else {
-        panic!("not an expression statement")
-    };
+    let ItemKind::Function(f) = &shader.items[1].kind else { panic!("no function") };
+    let StmtKind::Expr(e) = &f.body.stmts[0].kind else { panic!("not an expression statement") };
     e.clone()
 }
 
@@ -25,18 +21,11 @@ fn show(e: &ast::Expr) -> String {
             format!("({} {} {})", show(lhs), op.symbol(), show(rhs))
         }
         ExprKind::Assign { op, target, value } => {
-            format!(
-                "({} {}= {})",
-                show(target),
-                op.map_or("", BinaryOp::symbol),
-                show(value)
-            )
+            format!("({} {}= {})", show(target), op.map_or("", BinaryOp::symbol), show(value))
         }
-        ExprKind::Ternary {
-            cond,
-            then,
-            otherwise,
-        } => format!("({} ? {} : {})", show(cond), show(then), show(otherwise)),
+        ExprKind::Ternary { cond, then, otherwise } => {
+            format!("({} ? {} : {})", show(cond), show(then), show(otherwise))
+        }
         ExprKind::Unary { operand, .. } => format!("(-{})", show(operand)),
         ExprKind::IncDec { op, target } => match (op.prefix, op.increment) {
             (true, true) => format!("(++{})", show(target)),
@@ -44,11 +33,9 @@ fn show(e: &ast::Expr) -> String {
             (true, false) => format!("(--{})", show(target)),
             (false, false) => format!("({}--)", show(target)),
         },
-        ExprKind::Call { callee, args } => format!(
-            "{}({})",
-            callee.name,
-            args.iter().map(show).collect::<Vec<_>>().join(", ")
-        ),
+        ExprKind::Call { callee, args } => {
+            format!("{}({})", callee.name, args.iter().map(show).collect::<Vec<_>>().join(", "))
+        }
         ExprKind::Member { base, name } => format!("{}.{}", show(base), name.name),
         ExprKind::Index { base, index } => format!("{}[{}]", show(base), show(index)),
         other => format!("{other:?}"),
@@ -60,14 +47,8 @@ fn precedence_follows_glsl() {
     assert_eq!(show(&expr_of("a + b * c - d")), "((a + (b * c)) - d)");
     assert_eq!(show(&expr_of("a << 1 + b")), "(a << (1 + b))");
     assert_eq!(show(&expr_of("a & b | c ^ d")), "((a & b) | (c ^ d))");
-    assert_eq!(
-        show(&expr_of("a || b && c == d < e")),
-        "(a || (b && (c == (d < e))))"
-    );
-    assert_eq!(
-        show(&expr_of("x = a ? b : c ? d : e")),
-        "(x = (a ? b : (c ? d : e)))"
-    );
+    assert_eq!(show(&expr_of("a || b && c == d < e")), "(a || (b && (c == (d < e))))");
+    assert_eq!(show(&expr_of("x = a ? b : c ? d : e")), "(x = (a ? b : (c ? d : e)))");
     assert_eq!(show(&expr_of("x += y = z")), "(x += (y = z))");
     assert_eq!(show(&expr_of("-a.x++ * b[i]")), "((-(a.x++)) * b[i])");
     assert_eq!(show(&expr_of("f(seed++, --k)")), "f((seed++), (--k))");
@@ -96,16 +77,7 @@ fn number_literals_follow_godot() {
             other => panic!("{s}: {other:?}"),
         }
     }
-    for bad in [
-        "2f",
-        "1e",
-        "1e+",
-        "0x1FFFFFFFF",
-        "0x",
-        "1.5u",
-        "4294967296",
-        "3x",
-    ] {
+    for bad in ["2f", "1e", "1e+", "0x1FFFFFFFF", "0x", "1.5u", "4294967296", "3x"] {
         assert!(parse_number_kind(bad).is_err(), "{bad} should be rejected");
     }
 }
@@ -117,20 +89,9 @@ fn parse_number_kind(s: &str) -> Result<ExprKind, String> {
 #[test]
 fn deep_nesting_is_an_error_not_a_crash() {
     for text in [
-        format!(
-            "shader_type sky; void sky() {{ float x = {}1.0{}; }}",
-            "(".repeat(20_000),
-            ")".repeat(20_000)
-        ),
-        format!(
-            "shader_type sky; void sky() {}{}",
-            "{".repeat(20_000),
-            "}".repeat(20_000)
-        ),
-        format!(
-            "shader_type sky; void sky() {{ {} COLOR = vec3(1.0); }}",
-            "if (true) ".repeat(20_000)
-        ),
+        format!("shader_type sky; void sky() {{ float x = {}1.0{}; }}", "(".repeat(20_000), ")".repeat(20_000)),
+        format!("shader_type sky; void sky() {}{}", "{".repeat(20_000), "}".repeat(20_000)),
+        format!("shader_type sky; void sky() {{ {} COLOR = vec3(1.0); }}", "if (true) ".repeat(20_000)),
         format!(
             "shader_type sky; void sky() {{ float x = {}1.0{}; }}",
             "true ? ".repeat(20_000),
@@ -146,24 +107,15 @@ fn deep_nesting_is_an_error_not_a_crash() {
 #[test]
 fn long_flat_chains_are_bounded_without_recursion() {
     // 200,000 terms: parsed iteratively, refused as too deep, dropped without recursion.
-    let text = format!(
-        "shader_type sky; void sky() {{ float x = 1.0{}; }}",
-        " + 1.0".repeat(200_000)
-    );
+    let text = format!("shader_type sky; void sky() {{ float x = 1.0{}; }}", " + 1.0".repeat(200_000));
     let (_, diags) = parse(&text);
     assert_eq!(diags.len(), 1, "{diags:?}");
     assert_eq!(diags[0].diagnostic.code, codes::NESTING_LIMIT);
-    let text = format!(
-        "shader_type sky; void sky() {{ float x = {}1.0; }}",
-        "- ".repeat(200_000)
-    );
+    let text = format!("shader_type sky; void sky() {{ float x = {}1.0; }}", "- ".repeat(200_000));
     let (_, diags) = parse(&text);
     assert_eq!(diags[0].diagnostic.code, codes::NESTING_LIMIT);
     // A long else-if chain is flat in the tree and fine.
-    let text = format!(
-        "shader_type sky; void sky() {{ if (true) {{}} {} }}",
-        "else if (true) {} ".repeat(10_000)
-    );
+    let text = format!("shader_type sky; void sky() {{ if (true) {{}} {} }}", "else if (true) {} ".repeat(10_000));
     let (_, diags) = parse(&text);
     assert!(diags.is_empty(), "{diags:?}");
 }
@@ -181,8 +133,5 @@ fn doc_comments_attach_to_the_next_uniform_only() {
             _ => None,
         })
         .collect();
-    assert_eq!(
-        docs,
-        vec![Some("Sun.\nBright.".into()), None, Some("Last.".into())]
-    );
+    assert_eq!(docs, vec![Some("Sun.\nBright.".into()), None, Some("Last.".into())]);
 }

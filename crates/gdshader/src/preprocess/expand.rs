@@ -32,11 +32,7 @@ pub(crate) struct Fnv(u64);
 
 impl Hasher for Fnv {
     fn write(&mut self, bytes: &[u8]) {
-        let mut h = if self.0 == 0 {
-            0xcbf2_9ce4_8422_2325
-        } else {
-            self.0
-        };
+        let mut h = if self.0 == 0 { 0xcbf2_9ce4_8422_2325 } else { self.0 };
         for &b in bytes {
             h ^= u64::from(b);
             h = h.wrapping_mul(0x0100_0000_01b3);
@@ -140,8 +136,7 @@ impl SrcCursor<'_> {
 
     /// Position of the `(` that follows (after blanks, line breaks and comments), if one does.
     pub(crate) fn lparen(&self) -> Option<usize> {
-        self.skip_space(self.pos)
-            .filter(|&i| self.text.as_bytes()[i] == b'(')
+        self.skip_space(self.pos).filter(|&i| self.text.as_bytes()[i] == b'(')
     }
 
     /// The next token, or `None` at the end of the text or a directive line.
@@ -206,19 +201,13 @@ impl Unclosed {
             }
         }
         // `open` holds positions in the order they were met: ascending.
-        Unclosed {
-            start: lparen,
-            end: cur.pos,
-            unmatched: open,
-        }
+        Unclosed { start: lparen, end: cur.pos, unmatched: open }
     }
 
     /// Whether the argument list opened at `lparen` is known to be unclosed (`Some(true)`), known
     /// to close (`Some(false)`), or unknown.
     pub fn verdict(&self, lparen: usize) -> Option<bool> {
-        (self.start..self.end)
-            .contains(&lparen)
-            .then(|| self.unmatched.binary_search(&lparen).is_ok())
+        (self.start..self.end).contains(&lparen).then(|| self.unmatched.binary_search(&lparen).is_ok())
     }
 }
 
@@ -244,9 +233,7 @@ impl Expander {
     }
 
     pub fn is_function_like(&self, id: u32) -> bool {
-        self.macros
-            .get(id as usize)
-            .is_some_and(|m| m.params.is_some())
+        self.macros.get(id as usize).is_some_and(|m| m.params.is_some())
     }
 
     pub fn define(&mut self, mac: Macro) -> u32 {
@@ -297,12 +284,7 @@ impl Expander {
         Ok(())
     }
 
-    fn push_ctx(
-        &mut self,
-        stack: &mut Vec<Ctx>,
-        toks: Vec<Tok>,
-        mac: Option<u32>,
-    ) -> Result<(), Stop> {
+    fn push_ctx(&mut self, stack: &mut Vec<Ctx>, toks: Vec<Tok>, mac: Option<u32>) -> Result<(), Stop> {
         if self.depth >= MAX_DEPTH {
             return Err(self.hit(Limit::Depth));
         }
@@ -388,12 +370,7 @@ impl Expander {
     /// Expands the invocation of macro `id` whose name was just read from `src` (which is left
     /// after the name). Returns `Ok(false)` when a function-like macro's argument list is never
     /// closed: nothing was expanded and `src` is unchanged.
-    pub fn expand_from_source(
-        &mut self,
-        id: u32,
-        src: &mut SrcCursor<'_>,
-        sink: &mut Sink<'_>,
-    ) -> Result<bool, Stop> {
+    pub fn expand_from_source(&mut self, id: u32, src: &mut SrcCursor<'_>, sink: &mut Sink<'_>) -> Result<bool, Stop> {
         self.begin();
         let mut stack = Vec::new();
         let result = self.expand_from_source_inner(id, &mut stack, src, sink);
@@ -501,14 +478,8 @@ impl Expander {
                 }
                 let src_pos = src.as_deref().map(|s| s.pos);
                 // The `(` is in the source text when the contexts hold nothing else.
-                let from_src = stack
-                    .iter()
-                    .all(|c| c.toks.get(c.pos..).unwrap_or(&[]).iter().all(Tok::is_ws));
-                let lparen = if from_src {
-                    src.as_deref().and_then(SrcCursor::lparen)
-                } else {
-                    None
-                };
+                let from_src = stack.iter().all(|c| c.toks.get(c.pos..).unwrap_or(&[]).iter().all(Tok::is_ws));
+                let lparen = if from_src { src.as_deref().and_then(SrcCursor::lparen) } else { None };
                 if lparen.is_some_and(|lp| self.known_unclosed(lp)) {
                     self.emit(sink, tok)?;
                     continue;
@@ -585,15 +556,9 @@ impl Expander {
             arg.drain(..lead);
         }
         if args.len() != want {
-            let (s, were) = (
-                if want == 1 { "" } else { "s" },
-                if args.len() == 1 { "was" } else { "were" },
-            );
+            let (s, were) = (if want == 1 { "" } else { "s" }, if args.len() == 1 { "was" } else { "were" });
             self.errors.push(ArgError {
-                message: format!(
-                    "macro `{name}` takes {want} argument{s} but {} {were} given",
-                    args.len()
-                ),
+                message: format!("macro `{name}` takes {want} argument{s} but {} {were} given", args.len()),
                 note: None,
             });
             return Ok(Collected::Bad);
@@ -634,10 +599,8 @@ impl Expander {
                 Kind::Param => {
                     let i = bt.param as usize;
                     let Some(raw) = args.get(i) else { continue };
-                    let next_is_paste = body[k + 1..]
-                        .iter()
-                        .find(|t| !t.is_ws())
-                        .is_some_and(|t| t.kind == Kind::Paste);
+                    let next_is_paste =
+                        body[k + 1..].iter().find(|t| !t.is_ws()).is_some_and(|t| t.kind == Kind::Paste);
                     let toks = if paste || next_is_paste {
                         raw
                     } else {

@@ -17,11 +17,7 @@ pub(crate) struct ExprError {
 }
 
 fn err(message: impl Into<String>) -> ExprError {
-    ExprError {
-        message: message.into(),
-        note: None,
-        ident: None,
-    }
+    ExprError { message: message.into(), note: None, ident: None }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -32,10 +28,8 @@ enum T {
     RParen,
 }
 
-const OPS: [&str; 21] = [
-    "&&", "||", "<<", ">>", "<=", ">=", "==", "!=", "!", "~", "-", "+", "*", "/", "%", "<", ">",
-    "&", "^", "|", "=",
-];
+const OPS: [&str; 21] =
+    ["&&", "||", "<<", ">>", "<=", ">=", "==", "!=", "!", "~", "-", "+", "*", "/", "%", "<", ">", "&", "^", "|", "="];
 
 /// Deepest nesting of parentheses and prefix operators.
 const MAX_NESTING: usize = 128;
@@ -111,8 +105,7 @@ fn parse_int(word: &str) -> Result<i64, ExprError> {
     if digits.is_empty() || !digits.bytes().all(|b| (b as char).is_digit(radix)) {
         return Err(bad());
     }
-    i64::from_str_radix(digits, radix)
-        .map_err(|_| err(format!("the integer `{word}` is too large")))
+    i64::from_str_radix(digits, radix).map_err(|_| err(format!("the integer `{word}` is too large")))
 }
 
 /// Binding priority of a binary operator (Godot's `Expression`: lower binds tighter).
@@ -156,9 +149,7 @@ impl Parser {
     fn enter(&mut self) -> Result<(), ExprError> {
         self.depth += 1;
         if self.depth > MAX_NESTING {
-            return Err(err(format!(
-                "the `#if` condition is nested more than {MAX_NESTING} levels deep"
-            )));
+            return Err(err(format!("the `#if` condition is nested more than {MAX_NESTING} levels deep")));
         }
         Ok(())
     }
@@ -261,9 +252,7 @@ fn apply(op: &str, a: i64, b: i64, eval: bool) -> Result<i64, ExprError> {
         "<<" | ">>" => {
             if !(0..64).contains(&b) {
                 if eval {
-                    return Err(err(format!(
-                        "shift by {b} is out of range in the `#if` condition"
-                    )));
+                    return Err(err(format!("shift by {b} is out of range in the `#if` condition")));
                 }
                 0
             } else if op == "<<" {
@@ -291,17 +280,10 @@ pub(crate) fn eval(text: &str) -> Result<i64, ExprError> {
     if toks.is_empty() {
         return Err(err("the condition is empty"));
     }
-    let mut p = Parser {
-        toks,
-        pos: 0,
-        depth: 0,
-    };
+    let mut p = Parser { toks, pos: 0, depth: 0 };
     let v = p.binary(LOOSEST, true)?;
     if let Some(t) = p.peek() {
-        return Err(err(format!(
-            "unexpected {} in the `#if` condition",
-            describe(t)
-        )));
+        return Err(err(format!("unexpected {} in the `#if` condition", describe(t))));
     }
     Ok(v)
 }
@@ -329,12 +311,7 @@ mod tests {
 
     #[test]
     fn errors() {
-        assert!(
-            eval("1 / 0")
-                .unwrap_err()
-                .message
-                .contains("division by zero")
-        );
+        assert!(eval("1 / 0").unwrap_err().message.contains("division by zero"));
         assert!(eval("5 % 0").is_err());
         let e = eval("FOO + 1").unwrap_err();
         assert_eq!(e.ident.as_deref(), Some("FOO"));

@@ -45,22 +45,12 @@ impl Tok {
         if kind == Kind::Ws {
             return Self::space();
         }
-        Tok {
-            text: Rc::from(text),
-            param: 0,
-            kind,
-            noexpand: false,
-        }
+        Tok { text: Rc::from(text), param: 0, kind, noexpand: false }
     }
 
     /// A single space.
     pub fn space() -> Self {
-        Tok {
-            text: SPACE.with(Rc::clone),
-            param: 0,
-            kind: Kind::Ws,
-            noexpand: false,
-        }
+        Tok { text: SPACE.with(Rc::clone), param: 0, kind: Kind::Ws, noexpand: false }
     }
 
     pub fn is_ws(&self) -> bool {
@@ -91,9 +81,7 @@ pub(crate) fn word_end(s: &[u8], mut i: usize) -> usize {
 
 /// Position of the next `\n` at or after `i`, or the end.
 pub(crate) fn line_end(s: &[u8], i: usize) -> usize {
-    s.get(i..)
-        .and_then(|rest| rest.iter().position(|&b| b == b'\n'))
-        .map_or(s.len(), |p| i + p)
+    s.get(i..).and_then(|rest| rest.iter().position(|&b| b == b'\n')).map_or(s.len(), |p| i + p)
 }
 
 /// End of a block comment whose body starts at `i` (just after `/*`): the position after `*/`,
@@ -189,10 +177,7 @@ mod tests {
     use super::*;
 
     fn kinds(text: &str) -> Vec<(Kind, String)> {
-        lex_all(text)
-            .into_iter()
-            .map(|t| (t.kind, t.text.to_string()))
-            .collect()
+        lex_all(text).into_iter().map(|t| (t.kind, t.text.to_string())).collect()
     }
 
     #[test]

@@ -118,11 +118,7 @@ pub fn preprocess(
         map: SourceMap::new(),
         includes: Vec::new(),
         seen: HashSet::new(),
-        files: vec![Frame {
-            path: root_path,
-            name: root_name,
-            site: None,
-        }],
+        files: vec![Frame { path: root_path, name: root_name, site: None }],
         exp: Expander::new(),
         disabled: false,
         input_len: 0,
@@ -142,11 +138,7 @@ pub fn preprocess(
     }
     pp.add_input(root_len);
     pp.process_file(root);
-    Preprocessed {
-        text: pp.out,
-        map: pp.map,
-        includes: pp.includes,
-    }
+    Preprocessed { text: pp.out, map: pp.map, includes: pp.includes }
 }
 
 /// A file being preprocessed (the root, or an include being read).
@@ -193,23 +185,14 @@ impl DirLine {
     /// File range of `text[a..b]`.
     fn range(&self, a: usize, b: usize) -> Range<usize> {
         let at = |i: usize| self.src.get(i).copied();
-        let start = at(a)
-            .or_else(|| at(self.src.len().wrapping_sub(1)).map(|p| p + 1))
-            .unwrap_or(self.hash + 1);
-        let end = if b > a {
-            at(b - 1).map_or(start, |p| p + 1)
-        } else {
-            start
-        };
+        let start = at(a).or_else(|| at(self.src.len().wrapping_sub(1)).map(|p| p + 1)).unwrap_or(self.hash + 1);
+        let end = if b > a { at(b - 1).map_or(start, |p| p + 1) } else { start };
         start..end.max(start)
     }
 
     /// The whole directive, from `#` to its last non-blank character.
     fn whole(&self) -> Range<usize> {
-        let trimmed = self
-            .text
-            .trim_end_matches(|c: char| c.is_ascii_whitespace())
-            .len();
+        let trimmed = self.text.trim_end_matches(|c: char| c.is_ascii_whitespace()).len();
         self.hash..self.range(0, trimmed).end.max(self.hash + 1)
     }
 }
@@ -223,9 +206,7 @@ fn skip_blanks(t: &[u8], mut p: usize) -> usize {
 
 /// `(start, end)` of the identifier at `p`, if one starts there.
 fn ident_at(t: &[u8], p: usize) -> Option<(usize, usize)> {
-    t.get(p)
-        .filter(|&&b| lex::is_ident_start(b))
-        .map(|_| (p, lex::word_end(t, p)))
+    t.get(p).filter(|&&b| lex::is_ident_start(b)).map(|_| (p, lex::word_end(t, p)))
 }
 
 /// Control characters the parser also rejects (tab, CR, VT, FF are fine).
@@ -304,11 +285,9 @@ impl Pp<'_> {
 
     fn add_input(&mut self, len: usize) {
         self.input_len = self.input_len.saturating_add(len);
-        self.exp.out_limit =
-            OUTPUT_CAP.min(OUTPUT_FLOOR.max(self.input_len.saturating_mul(OUTPUT_FACTOR)));
+        self.exp.out_limit = OUTPUT_CAP.min(OUTPUT_FLOOR.max(self.input_len.saturating_mul(OUTPUT_FACTOR)));
         let input = self.input_len as u64;
-        self.exp.work_limit =
-            WORK_CAP.min(WORK_FLOOR.saturating_add(WORK_FACTOR.saturating_mul(input)));
+        self.exp.work_limit = WORK_CAP.min(WORK_FLOOR.saturating_add(WORK_FACTOR.saturating_mul(input)));
     }
 
     /// Copies `text[a..b]` of `file` to the output unchanged.
@@ -341,9 +320,7 @@ impl Pp<'_> {
         self.report(
             Diagnostic::error(codes::UNCLOSED_COMMENT, "this comment is never closed")
                 .with_primary(file, at..at + 2, "comment starts here")
-                .with_note(
-                    "expected `*/` before the end of the file (Godot: \"Block comment mismatch\")",
-                ),
+                .with_note("expected `*/` before the end of the file (Godot: \"Block comment mismatch\")"),
         );
     }
 
@@ -439,12 +416,9 @@ impl Pp<'_> {
                     // is dropped.
                     self.flush(file, &text, vstart, i);
                     self.report(
-                        Diagnostic::error(
-                            codes::PP_BAD_DIRECTIVE,
-                            "a directive must be the first thing on its line",
-                        )
-                        .with_primary(file, i..i + 1, "code comes before this `#`")
-                        .with_note("move the directive to a line of its own"),
+                        Diagnostic::error(codes::PP_BAD_DIRECTIVE, "a directive must be the first thing on its line")
+                            .with_primary(file, i..i + 1, "code comes before this `#`")
+                            .with_note("move the directive to a line of its own"),
                     );
                     let dl = self.scan_directive(file, &text, i);
                     for &nl in &dl.newlines {
@@ -494,31 +468,17 @@ impl Pp<'_> {
         name_end: usize,
         id: u32,
     ) -> (usize, usize) {
-        let mut cur = SrcCursor {
-            text,
-            pos: name_end,
-        };
+        let mut cur = SrcCursor { text, pos: name_end };
         if self.exp.is_function_like(id) && !cur.peek_lparen() {
             // A function-like macro's name without arguments is left alone.
             return (name_end, vstart);
         }
         self.flush(file, text, vstart, start);
         let mut buf = String::new();
-        let result = self.exp.expand_from_source(
-            id,
-            &mut cur,
-            &mut Sink::Text {
-                buf: &mut buf,
-                base: self.out.len(),
-            },
-        );
+        let result = self.exp.expand_from_source(id, &mut cur, &mut Sink::Text { buf: &mut buf, base: self.out.len() });
         let site = start..cur.pos.max(name_end);
         if let Some(err) = self.exp.take_errors().into_iter().next() {
-            let at = if matches!(result, Ok(false)) {
-                start..name_end
-            } else {
-                site.clone()
-            };
+            let at = if matches!(result, Ok(false)) { start..name_end } else { site.clone() };
             self.report(
                 Diagnostic::error(codes::PP_MACRO_ARGUMENTS, err.message)
                     .with_primary(file, at, "in this macro invocation")
@@ -529,8 +489,7 @@ impl Pp<'_> {
             Ok(true) => {
                 let out_start = self.out.len();
                 self.out.push_str(&buf);
-                self.map
-                    .push_expansion(out_start..self.out.len(), file, site.clone());
+                self.map.push_expansion(out_start..self.out.len(), file, site.clone());
                 self.newlines_in(file, text.as_bytes(), site.clone());
                 (site.end, site.end)
             }
@@ -545,24 +504,12 @@ impl Pp<'_> {
 
     fn report_limit(&mut self, file: FileId, at: Range<usize>) {
         let message = match self.exp.limit {
-            Some(Limit::Depth) => format!(
-                "macro expansion nests more than {} levels deep",
-                expand::MAX_DEPTH
-            ),
+            Some(Limit::Depth) => format!("macro expansion nests more than {} levels deep", expand::MAX_DEPTH),
             Some(Limit::Output) => {
-                format!(
-                    "macro expansion makes the preprocessed text longer than {} bytes",
-                    self.exp.out_limit
-                )
+                format!("macro expansion makes the preprocessed text longer than {} bytes", self.exp.out_limit)
             }
-            Some(Limit::Held) => format!(
-                "one macro expansion builds up more than {} tokens",
-                expand::MAX_HELD
-            ),
-            Some(Limit::Work) | None => format!(
-                "macro expansion reads more than {} tokens",
-                self.exp.work_limit
-            ),
+            Some(Limit::Held) => format!("one macro expansion builds up more than {} tokens", expand::MAX_HELD),
+            Some(Limit::Work) | None => format!("macro expansion reads more than {} tokens", self.exp.work_limit),
         };
         self.report(
             Diagnostic::error(codes::PP_EXPANSION_LIMIT, message)
@@ -640,29 +587,17 @@ impl Pp<'_> {
             }
         };
         if let Some(at) = bad {
-            let what = if s[at] == 0 {
-                "a NUL byte".to_string()
-            } else {
-                format!("control character U+{:04X}", s[at])
-            };
+            let what = if s[at] == 0 { "a NUL byte".to_string() } else { format!("control character U+{:04X}", s[at]) };
             self.report(
-                Diagnostic::error(
-                    codes::INVALID_CHARACTER,
-                    format!("the source contains {what}"),
-                )
-                .with_primary(file, at..at + 1, "not allowed in shader source"),
+                Diagnostic::error(codes::INVALID_CHARACTER, format!("the source contains {what}")).with_primary(
+                    file,
+                    at..at + 1,
+                    "not allowed in shader source",
+                ),
             );
         }
-        let text = String::from_utf8(bytes)
-            .unwrap_or_else(|e| String::from_utf8_lossy(e.as_bytes()).into_owned());
-        DirLine {
-            text,
-            src,
-            hash,
-            end,
-            newlines,
-            resume_blank,
-        }
+        let text = String::from_utf8(bytes).unwrap_or_else(|e| String::from_utf8_lossy(e.as_bytes()).into_owned());
+        DirLine { text, src, hash, end, newlines, resume_blank }
     }
 
     fn directive(&mut self, file: FileId, dl: &DirLine, conds: &mut Vec<Cond>, active: bool) {
@@ -671,8 +606,7 @@ impl Pp<'_> {
         let name_end = lex::word_end(t, name_start);
         let name = dl.text.get(name_start..name_end).unwrap_or("");
         let head = dl.hash..dl.range(name_start, name_end).end.max(dl.hash + 1);
-        let closes_open = matches!(name, "elif" | "else" | "endif")
-            && conds.last().is_some_and(|c| c.parent_active);
+        let closes_open = matches!(name, "elif" | "else" | "endif") && conds.last().is_some_and(|c| c.parent_active);
         if name_start > 0 && !name.is_empty() && (active || closes_open) {
             // Godot reads the directive name right after `#`, so it rejects `# define`.
             self.report(
@@ -732,37 +666,25 @@ impl Pp<'_> {
             "include" => self.do_include(file, dl, name_end, head),
             "error" => {
                 let message = dl.text[name_end..].trim();
-                let message = if message.is_empty() {
-                    "`#error` directive reached"
-                } else {
-                    message
-                };
-                self.report(
-                    Diagnostic::error(codes::PP_ERROR_DIRECTIVE, message).with_primary(
-                        file,
-                        dl.whole(),
-                        "`#error` reached here",
-                    ),
-                );
+                let message = if message.is_empty() { "`#error` directive reached" } else { message };
+                self.report(Diagnostic::error(codes::PP_ERROR_DIRECTIVE, message).with_primary(
+                    file,
+                    dl.whole(),
+                    "`#error` reached here",
+                ));
             }
             "pragma" => self.do_pragma(file, dl, name_end, head),
             "" => {
                 let at = dl.hash..dl.range(name_start, name_start + 1).end.max(dl.hash + 1);
                 self.report(
-                    Diagnostic::error(
-                        codes::PP_BAD_DIRECTIVE,
-                        "expected a directive name after `#`",
-                    )
-                    .with_primary(file, at, "not a directive")
-                    .with_note(DIRECTIVES_NOTE),
+                    Diagnostic::error(codes::PP_BAD_DIRECTIVE, "expected a directive name after `#`")
+                        .with_primary(file, at, "not a directive")
+                        .with_note(DIRECTIVES_NOTE),
                 );
             }
             _ => {
-                let mut d = Diagnostic::error(
-                    codes::PP_BAD_DIRECTIVE,
-                    format!("unknown directive `#{name}`"),
-                )
-                .with_primary(file, head, "not a directive Godot knows");
+                let mut d = Diagnostic::error(codes::PP_BAD_DIRECTIVE, format!("unknown directive `#{name}`"))
+                    .with_primary(file, head, "not a directive Godot knows");
                 d = match name {
                     "elifdef" | "elifndef" => d.with_note(format!(
                         "Godot has no `#{name}`; write `#elif {}defined(NAME)`",
@@ -788,11 +710,8 @@ impl Pp<'_> {
         let p = skip_blanks(t, from);
         let Some((a, b)) = ident_at(t, p) else {
             self.report(
-                Diagnostic::error(
-                    codes::PP_BAD_DIRECTIVE,
-                    format!("expected a macro name after `#{directive}`"),
-                )
-                .with_primary(file, head.clone(), "needs a macro name"),
+                Diagnostic::error(codes::PP_BAD_DIRECTIVE, format!("expected a macro name after `#{directive}`"))
+                    .with_primary(file, head.clone(), "needs a macro name"),
             );
             return None;
         };
@@ -817,34 +736,19 @@ impl Pp<'_> {
         let rest = skip_blanks(t, from);
         if rest < t.len() {
             self.report(
-                Diagnostic::error(
-                    codes::PP_BAD_DIRECTIVE,
-                    format!("unexpected text after {what}"),
-                )
-                .with_primary(file, dl.range(rest, t.len()), "unexpected")
-                .with_note(format!("expected the end of the line after {what}")),
+                Diagnostic::error(codes::PP_BAD_DIRECTIVE, format!("unexpected text after {what}"))
+                    .with_primary(file, dl.range(rest, t.len()), "unexpected")
+                    .with_note(format!("expected the end of the line after {what}")),
             );
         }
     }
 
-    fn do_elif(
-        &mut self,
-        file: FileId,
-        dl: &DirLine,
-        from: usize,
-        head: Range<usize>,
-        conds: &mut [Cond],
-    ) {
+    fn do_elif(&mut self, file: FileId, dl: &DirLine, from: usize, head: Range<usize>, conds: &mut [Cond]) {
         let Some(top) = conds.last_mut() else {
             self.report(
-                Diagnostic::error(
-                    codes::PP_UNBALANCED_CONDITIONAL,
-                    "`#elif` without a matching `#if`",
-                )
-                .with_primary(file, head, "no `#if` is open here")
-                .with_note(
-                    "`#elif` continues an `#if`, `#ifdef` or `#ifndef` earlier in the same file",
-                ),
+                Diagnostic::error(codes::PP_UNBALANCED_CONDITIONAL, "`#elif` without a matching `#if`")
+                    .with_primary(file, head, "no `#if` is open here")
+                    .with_note("`#elif` continues an `#if`, `#ifdef` or `#ifndef` earlier in the same file"),
             );
             return;
         };
@@ -854,9 +758,7 @@ impl Pp<'_> {
                 self.report(
                     Diagnostic::error(codes::PP_UNBALANCED_CONDITIONAL, "`#elif` after `#else`")
                         .with_primary(file, head, "comes after the `#else`")
-                        .with_note(
-                            "expected `#endif` to close the conditional after its `#else` branch",
-                        ),
+                        .with_note("expected `#endif` to close the conditional after its `#else` branch"),
                 );
             }
             return;
@@ -883,14 +785,9 @@ impl Pp<'_> {
     ) {
         let Some(top) = conds.last_mut() else {
             self.report(
-                Diagnostic::error(
-                    codes::PP_UNBALANCED_CONDITIONAL,
-                    format!("`#{name}` without a matching `#if`"),
-                )
-                .with_primary(file, head, "no `#if` is open here")
-                .with_note(format!(
-                    "`#{name}` closes an `#if`, `#ifdef` or `#ifndef` earlier in the same file"
-                )),
+                Diagnostic::error(codes::PP_UNBALANCED_CONDITIONAL, format!("`#{name}` without a matching `#if`"))
+                    .with_primary(file, head, "no `#if` is open here")
+                    .with_note(format!("`#{name}` closes an `#if`, `#ifdef` or `#ifndef` earlier in the same file")),
             );
             return;
         };
@@ -901,12 +798,9 @@ impl Pp<'_> {
             top.active = false;
             if checked {
                 self.report(
-                    Diagnostic::error(
-                        codes::PP_UNBALANCED_CONDITIONAL,
-                        "a second `#else` in the same conditional",
-                    )
-                    .with_primary(file, head, "second `#else`")
-                    .with_note("expected `#endif`"),
+                    Diagnostic::error(codes::PP_UNBALANCED_CONDITIONAL, "a second `#else` in the same conditional")
+                        .with_primary(file, head, "second `#else`")
+                        .with_note("expected `#endif`"),
                 );
             }
         } else {
@@ -923,20 +817,13 @@ impl Pp<'_> {
     fn condition(&mut self, file: FileId, dl: &DirLine, from: usize, head: &Range<usize>) -> bool {
         let t = dl.text.as_bytes();
         let a = skip_blanks(t, from);
-        let b = dl
-            .text
-            .trim_end_matches(|c: char| c.is_ascii_whitespace())
-            .len()
-            .max(a);
+        let b = dl.text.trim_end_matches(|c: char| c.is_ascii_whitespace()).len().max(a);
         let directive = &dl.text[skip_blanks(t, 0)..from];
         if a >= b {
             self.report(
-                Diagnostic::error(
-                    codes::PP_BAD_EXPRESSION,
-                    format!("`#{directive}` needs a condition"),
-                )
-                .with_primary(file, head.clone(), "no condition")
-                .with_note("expected an expression such as `defined(NAME)` or `NAME > 1`"),
+                Diagnostic::error(codes::PP_BAD_EXPRESSION, format!("`#{directive}` needs a condition"))
+                    .with_primary(file, head.clone(), "no condition")
+                    .with_note("expected an expression such as `defined(NAME)` or `NAME > 1`"),
             );
             return false;
         }
@@ -967,12 +854,9 @@ impl Pp<'_> {
             }
             let Some(name) = toks.get(m).filter(|t| t.kind == Kind::Ident) else {
                 self.report(
-                    Diagnostic::error(
-                        codes::PP_BAD_EXPRESSION,
-                        "`defined` must be followed by a macro name",
-                    )
-                    .with_primary(file, at, "in this condition")
-                    .with_note("expected `defined(NAME)` or `defined NAME`"),
+                    Diagnostic::error(codes::PP_BAD_EXPRESSION, "`defined` must be followed by a macro name")
+                        .with_primary(file, at, "in this condition")
+                        .with_note("expected `defined(NAME)` or `defined NAME`"),
                 );
                 return false;
             };
@@ -982,12 +866,9 @@ impl Pp<'_> {
                 m = skip_ws(m);
                 if !toks.get(m).is_some_and(|t| t.kind == Kind::RParen) {
                     self.report(
-                        Diagnostic::error(
-                            codes::PP_BAD_EXPRESSION,
-                            "expected `)` after the macro name in `defined(`",
-                        )
-                        .with_primary(file, at, "in this condition")
-                        .with_note("`defined(…)` takes exactly one macro name"),
+                        Diagnostic::error(codes::PP_BAD_EXPRESSION, "expected `)` after the macro name in `defined(`")
+                            .with_primary(file, at, "in this condition")
+                            .with_note("`defined(…)` takes exactly one macro name"),
                     );
                     return false;
                 }
@@ -1018,9 +899,7 @@ impl Pp<'_> {
                 let place = e
                     .ident
                     .as_deref()
-                    .and_then(|id| {
-                        find_word(&dl.text[a..b], id).map(|p| dl.range(a + p, a + p + id.len()))
-                    })
+                    .and_then(|id| find_word(&dl.text[a..b], id).map(|p| dl.range(a + p, a + p + id.len())))
                     .unwrap_or(at);
                 self.report(
                     Diagnostic::error(codes::PP_BAD_EXPRESSION, e.message)
@@ -1037,10 +916,7 @@ impl Pp<'_> {
         let ns = skip_blanks(t, from);
         // Godot reads the name up to a blank or one of `( ) , ;`, then checks it.
         let mut stop = ns;
-        while stop < t.len()
-            && !lex::is_blank(t[stop])
-            && !matches!(t[stop], b'(' | b')' | b',' | b';')
-        {
+        while stop < t.len() && !lex::is_blank(t[stop]) && !matches!(t[stop], b'(' | b')' | b',' | b';') {
             stop += 1;
         }
         let ne = lex::word_end(t, ns);
@@ -1050,17 +926,11 @@ impl Pp<'_> {
             } else {
                 format!("`{}` is not a valid macro name", &dl.text[ns..stop])
             };
-            let at = if ns == stop {
-                dl.whole()
-            } else {
-                dl.range(ns, stop)
-            };
+            let at = if ns == stop { dl.whole() } else { dl.range(ns, stop) };
             self.report(
                 Diagnostic::error(codes::PP_BAD_DIRECTIVE, message)
                     .with_primary(file, at, "invalid macro name")
-                    .with_note(
-                        "a macro name is a letter or `_` followed by letters, digits and `_`",
-                    ),
+                    .with_note("a macro name is a letter or `_` followed by letters, digits and `_`"),
             );
             return;
         }
@@ -1068,20 +938,15 @@ impl Pp<'_> {
         let name_at = dl.range(ns, ne);
         if let Some(id) = self.exp.lookup(name) {
             let prev = &self.exp.macros[id as usize];
-            let mut d = Diagnostic::error(
-                codes::PP_MACRO_REDEFINED,
-                format!("macro `{name}` is already defined"),
-            )
-            .with_primary(file, name_at, "defined again here");
+            let mut d = Diagnostic::error(codes::PP_MACRO_REDEFINED, format!("macro `{name}` is already defined"))
+                .with_primary(file, name_at, "defined again here");
             if let Some((pfile, prange)) = prev.def.clone() {
                 d = d.with_secondary(pfile, prange, "first defined here");
             }
             d = if prev.builtin {
                 d.with_note(format!("`{name}` is one of Godot's built-in defines"))
             } else {
-                d.with_note(format!(
-                    "Godot does not allow redefining a macro; use `#undef {name}` first"
-                ))
+                d.with_note(format!("Godot does not allow redefining a macro; use `#undef {name}` first"))
             };
             self.report(d);
             return;
@@ -1093,15 +958,19 @@ impl Pp<'_> {
             let mut list: Vec<Rc<str>> = Vec::new();
             loop {
                 let a = skip_blanks(t, p);
-                let Some((a, b)) = ident_at(t, a).filter(|&(_, b)| {
-                    t.get(b)
-                        .is_none_or(|&c| lex::is_blank(c) || c == b',' || c == b')')
-                }) else {
+                let Some((a, b)) = ident_at(t, a)
+                    .filter(|&(_, b)| t.get(b).is_none_or(|&c| lex::is_blank(c) || c == b',' || c == b')'))
+                else {
                     let at = dl.range(a, (a + 1).min(t.len()).max(a));
                     self.report(
-                        Diagnostic::error(codes::PP_BAD_DIRECTIVE, format!("invalid parameter list in the definition of `{name}`"))
-                            .with_primary(file, at, "expected a parameter name")
-                            .with_note("parameters are identifiers separated by `,`; Godot does not accept an empty list `()`"),
+                        Diagnostic::error(
+                            codes::PP_BAD_DIRECTIVE,
+                            format!("invalid parameter list in the definition of `{name}`"),
+                        )
+                        .with_primary(file, at, "expected a parameter name")
+                        .with_note(
+                            "parameters are identifiers separated by `,`; Godot does not accept an empty list `()`",
+                        ),
                     );
                     return;
                 };
@@ -1132,10 +1001,7 @@ impl Pp<'_> {
             params = Some(list);
         }
         let body_text = dl.text[p..].trim_matches(|c: char| c.is_ascii_whitespace());
-        for (bad, place) in [
-            (body_text.starts_with("##"), "start"),
-            (body_text.ends_with("##"), "end"),
-        ] {
+        for (bad, place) in [(body_text.starts_with("##"), "start"), (body_text.ends_with("##"), "end")] {
             if bad {
                 self.report(
                     Diagnostic::error(
@@ -1180,15 +1046,8 @@ impl Pp<'_> {
         if let Some(id) = self.exp.lookup(&name) {
             if self.exp.macros[id as usize].builtin {
                 self.report(
-                    Diagnostic::error(
-                        codes::PP_BAD_DIRECTIVE,
-                        format!("`{name}` is built in and cannot be undefined"),
-                    )
-                    .with_primary(
-                        file,
-                        dl.whole(),
-                        "cannot `#undef` a built-in define",
-                    ),
+                    Diagnostic::error(codes::PP_BAD_DIRECTIVE, format!("`{name}` is built in and cannot be undefined"))
+                        .with_primary(file, dl.whole(), "cannot `#undef` a built-in define"),
                 );
                 return;
             }
@@ -1201,12 +1060,9 @@ impl Pp<'_> {
         let p = skip_blanks(t, from);
         let Some((a, b)) = ident_at(t, p) else {
             self.report(
-                Diagnostic::error(
-                    codes::PP_BAD_DIRECTIVE,
-                    "expected a pragma name after `#pragma`",
-                )
-                .with_primary(file, head, "needs a name")
-                .with_note("the only pragma is `disable_preprocessor`"),
+                Diagnostic::error(codes::PP_BAD_DIRECTIVE, "expected a pragma name after `#pragma`")
+                    .with_primary(file, head, "needs a name")
+                    .with_note("the only pragma is `disable_preprocessor`"),
             );
             return;
         };
@@ -1226,32 +1082,24 @@ impl Pp<'_> {
     fn do_include(&mut self, file: FileId, dl: &DirLine, from: usize, head: Range<usize>) {
         let t = dl.text.as_bytes();
         let p = skip_blanks(t, from);
-        let close = if t.get(p) == Some(&b'"') {
-            t[p + 1..]
-                .iter()
-                .position(|&b| b == b'"')
-                .map(|q| p + 1 + q)
-        } else {
-            None
-        };
+        let close =
+            if t.get(p) == Some(&b'"') { t[p + 1..].iter().position(|&b| b == b'"').map(|q| p + 1 + q) } else { None };
         let Some(q) = close else {
             self.report(
-                Diagnostic::error(
-                    codes::PP_BAD_DIRECTIVE,
-                    "expected a path in double quotes after `#include`",
-                )
-                .with_primary(file, head, "needs a path")
-                .with_note("for example `#include \"res://shaders/common.gdshaderinc\"`"),
+                Diagnostic::error(codes::PP_BAD_DIRECTIVE, "expected a path in double quotes after `#include`")
+                    .with_primary(file, head, "needs a path")
+                    .with_note("for example `#include \"res://shaders/common.gdshaderinc\"`"),
             );
             return;
         };
         let path_at = dl.range(p, q + 1);
         let path = &dl.text[p + 1..q];
         if path.trim().is_empty() {
-            self.report(
-                Diagnostic::error(codes::PP_BAD_DIRECTIVE, "the `#include` path is empty")
-                    .with_primary(file, path_at, "empty path"),
-            );
+            self.report(Diagnostic::error(codes::PP_BAD_DIRECTIVE, "the `#include` path is empty").with_primary(
+                file,
+                path_at,
+                "empty path",
+            ));
             return;
         }
         self.expect_end(file, dl, q + 1, "the `#include` path");
@@ -1300,33 +1148,22 @@ impl Pp<'_> {
     fn include(&mut self, file: FileId, written: &str, at: Range<usize>) {
         let resolved = self.resolve(written);
         let display = resolved.display().to_string();
-        if let Some(pos) = self
-            .files
-            .iter()
-            .position(|f| f.path.as_ref() == Some(&resolved))
-        {
-            let chain: Vec<&str> = self.files[pos..]
-                .iter()
-                .map(|f| f.name.as_str())
-                .chain([display.as_str()])
-                .collect();
+        if let Some(pos) = self.files.iter().position(|f| f.path.as_ref() == Some(&resolved)) {
+            let chain: Vec<&str> =
+                self.files[pos..].iter().map(|f| f.name.as_str()).chain([display.as_str()]).collect();
             let message = format!("cyclic include: {}", chain.join(" → "));
             // Reported at the `#include` that enters the cycle, with the one that closes it.
             let d = match self.files[pos].site.clone() {
                 Some((entry_file, entry_at)) => Diagnostic::error(codes::PP_INCLUDE, message)
                     .with_primary(entry_file, entry_at, "this include leads back to itself")
                     .with_secondary(file, at, format!("`{display}` is included again here")),
-                None => Diagnostic::error(codes::PP_INCLUDE, message).with_primary(
-                    file,
-                    at,
-                    "includes the shader itself",
-                ),
+                None => {
+                    Diagnostic::error(codes::PP_INCLUDE, message).with_primary(file, at, "includes the shader itself")
+                }
             };
             if !self.reported_cycle {
                 self.reported_cycle = true;
-                self.report(d.with_note(
-                    "Godot does not allow a file to include itself, directly or through others",
-                ));
+                self.report(d.with_note("Godot does not allow a file to include itself, directly or through others"));
             }
             return;
         }
@@ -1344,9 +1181,7 @@ impl Pp<'_> {
                     format!("includes are nested more than {MAX_INCLUDE_DEPTH} levels deep"),
                 )
                 .with_primary(file, at, "one include too many")
-                .with_note(format!(
-                    "Godot allows at most {MAX_INCLUDE_DEPTH} nested `#include`s"
-                )),
+                .with_note(format!("Godot allows at most {MAX_INCLUDE_DEPTH} nested `#include`s")),
             );
             return;
         }
@@ -1373,11 +1208,7 @@ impl Pp<'_> {
                 } else {
                     format!("cannot read shader include `{display}`: {e}")
                 };
-                let mut d = Diagnostic::error(codes::PP_INCLUDE, message).with_primary(
-                    file,
-                    at,
-                    "included here",
-                );
+                let mut d = Diagnostic::error(codes::PP_INCLUDE, message).with_primary(file, at, "included here");
                 if !written.starts_with("res://") {
                     d = d.with_note("a relative path is resolved from the directory of the file that includes it");
                 }
@@ -1390,10 +1221,7 @@ impl Pp<'_> {
             self.report(
                 Diagnostic::error(
                     codes::PP_INCLUDE,
-                    format!(
-                        "the shader and its includes come to more than {} MiB",
-                        MAX_TOTAL_INPUT >> 20
-                    ),
+                    format!("the shader and its includes come to more than {} MiB", MAX_TOTAL_INPUT >> 20),
                 )
                 .with_primary(file, at, "one include too many")
                 .with_note("no further files are included"),
@@ -1406,11 +1234,7 @@ impl Pp<'_> {
             Ok(text) => {
                 self.add_input(text.len());
                 let id = self.db.add(display.clone(), text, Some(resolved.clone()));
-                self.files.push(Frame {
-                    path: Some(resolved),
-                    name: display,
-                    site: Some((file, at)),
-                });
+                self.files.push(Frame { path: Some(resolved), name: display, site: Some((file, at)) });
                 self.process_file(id);
                 self.files.pop();
                 // What is known of unclosed argument lists was about the included text.
@@ -1421,17 +1245,10 @@ impl Pp<'_> {
                 let lossy = String::from_utf8_lossy(e.as_bytes()).into_owned();
                 let id = self.db.add(display.clone(), lossy, Some(resolved));
                 self.report(
-                    Diagnostic::error(
-                        codes::INVALID_UTF8,
-                        format!("`{display}` is not valid UTF-8"),
-                    )
-                    .with_primary(
-                        id,
-                        valid..valid + '\u{FFFD}'.len_utf8(),
-                        "first invalid byte",
-                    )
-                    .with_secondary(file, at, "included here")
-                    .with_note("shader files must be UTF-8 text"),
+                    Diagnostic::error(codes::INVALID_UTF8, format!("`{display}` is not valid UTF-8"))
+                        .with_primary(id, valid..valid + '\u{FFFD}'.len_utf8(), "first invalid byte")
+                        .with_secondary(file, at, "included here")
+                        .with_note("shader files must be UTF-8 text"),
                 );
             }
         }

@@ -95,18 +95,10 @@ impl SourceMap {
         if !first.verbatim {
             return Some((first.file, first.src_start..first.src_end));
         }
-        let end_probe = if range.end > range.start {
-            range.end - 1
-        } else {
-            range.end
-        };
+        let end_probe = if range.end > range.start { range.end - 1 } else { range.end };
         let last = self.segment_at(end_probe).unwrap_or(first);
         let end = if last.file == first.file {
-            if last.verbatim {
-                map_offset(last, range.end).max(start)
-            } else {
-                last.src_end.max(start)
-            }
+            if last.verbatim { map_offset(last, range.end).max(start) } else { last.src_end.max(start) }
         } else {
             first.src_end.max(start)
         };
@@ -116,8 +108,7 @@ impl SourceMap {
 
 fn map_offset(seg: &Segment, offset: usize) -> usize {
     if seg.verbatim {
-        (seg.src_start + offset.saturating_sub(seg.out_start))
-            .min(seg.src_end.max(seg.src_start + 1))
+        (seg.src_start + offset.saturating_sub(seg.out_start)).min(seg.src_end.max(seg.src_start + 1))
     } else {
         seg.src_start
     }

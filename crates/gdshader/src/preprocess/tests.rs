@@ -14,9 +14,7 @@ struct MemLoader {
 impl Loader for MemLoader {
     fn load(&mut self, path: &Path) -> std::io::Result<Vec<u8>> {
         let found = self.files.get(path).or(self.fallback.as_ref());
-        found
-            .cloned()
-            .ok_or_else(|| std::io::Error::new(std::io::ErrorKind::NotFound, "not found"))
+        found.cloned().ok_or_else(|| std::io::Error::new(std::io::ErrorKind::NotFound, "not found"))
     }
 }
 
@@ -33,41 +31,23 @@ impl Run {
 
     /// `(file name, line)` of the primary label of the first diagnostic with `code`.
     fn place(&self, code: &str) -> (String, usize) {
-        let d = self
-            .diags
-            .iter()
-            .find(|d| d.code == code)
-            .unwrap_or_else(|| panic!("no {code} in {:?}", self.diags));
+        let d = self.diags.iter().find(|d| d.code == code).unwrap_or_else(|| panic!("no {code} in {:?}", self.diags));
         let l = d.primary_label().expect("label");
-        (
-            self.db.name(l.file).to_string(),
-            self.db.line_col(l.file, l.range.start).0,
-        )
+        (self.db.name(l.file).to_string(), self.db.line_col(l.file, l.range.start).0)
     }
 
     /// The text of the primary label of the first diagnostic with `code`.
     fn label_text(&self, code: &str) -> String {
-        let d = self
-            .diags
-            .iter()
-            .find(|d| d.code == code)
-            .unwrap_or_else(|| panic!("no {code} in {:?}", self.diags));
+        let d = self.diags.iter().find(|d| d.code == code).unwrap_or_else(|| panic!("no {code} in {:?}", self.diags));
         let l = d.primary_label().expect("label");
         self.db.text(l.file)[l.range.clone()].to_string()
     }
 
     /// Where `needle` (first occurrence in the output) maps back to: file name and line.
     fn locate(&self, needle: &str) -> (String, usize) {
-        let at = self
-            .out
-            .text
-            .find(needle)
-            .unwrap_or_else(|| panic!("{needle:?} not in {:?}", self.out.text));
+        let at = self.out.text.find(needle).unwrap_or_else(|| panic!("{needle:?} not in {:?}", self.out.text));
         let (file, range) = self.out.map.locate(at..at + needle.len()).expect("mapped");
-        (
-            self.db.name(file).to_string(),
-            self.db.line_col(file, range.start).0,
-        )
+        (self.db.name(file).to_string(), self.db.line_col(file, range.start).0)
     }
 }
 
@@ -75,11 +55,7 @@ impl Run {
 fn run_files(files: &[(&str, &[u8])]) -> Run {
     let mut db = SourceDb::new();
     let (name, text) = files[0];
-    let root = db.add(
-        name,
-        String::from_utf8(text.to_vec()).expect("root is UTF-8"),
-        Some(PathBuf::from(name)),
-    );
+    let root = db.add(name, String::from_utf8(text.to_vec()).expect("root is UTF-8"), Some(PathBuf::from(name)));
     let mut loader = MemLoader::default();
     for (name, text) in &files[1..] {
         loader.files.insert(PathBuf::from(name), text.to_vec());
@@ -92,15 +68,8 @@ fn run_files(files: &[(&str, &[u8])]) -> Run {
 /// Like the fuzz target: every include reads `src` itself.
 fn run_self(src: &str) -> Run {
     let mut db = SourceDb::new();
-    let root = db.add(
-        "fuzz.gdshader",
-        src.to_string(),
-        Some(PathBuf::from("fuzz.gdshader")),
-    );
-    let mut loader = MemLoader {
-        fallback: Some(src.as_bytes().to_vec()),
-        ..MemLoader::default()
-    };
+    let root = db.add("fuzz.gdshader", src.to_string(), Some(PathBuf::from("fuzz.gdshader")));
+    let mut loader = MemLoader { fallback: Some(src.as_bytes().to_vec()), ..MemLoader::default() };
     let mut diags = Vec::new();
     let out = preprocess(&mut db, root, &mut loader, &mut diags);
     Run { db, out, diags }
@@ -146,18 +115,8 @@ fn squash(text: &str) -> String {
 fn check(src: &str, expected: &str) {
     let r = run(src);
     assert!(r.diags.is_empty(), "unexpected diagnostics: {:?}", r.diags);
-    assert_eq!(
-        r.out.text.matches('\n').count(),
-        src.matches('\n').count(),
-        "line count changed: {:?}",
-        r.out.text
-    );
-    assert_eq!(
-        squash(&r.out.text),
-        squash(expected),
-        "output: {:?}",
-        r.out.text
-    );
+    assert_eq!(r.out.text.matches('\n').count(), src.matches('\n').count(), "line count changed: {:?}", r.out.text);
+    assert_eq!(squash(&r.out.text), squash(expected), "output: {:?}", r.out.text);
 }
 
 #[test]
@@ -176,28 +135,16 @@ fn object_like_macros() {
     check("#define A;\nA\n", "\n;");
     // Whole words only; not inside strings or comments; not after a digit.
     check("#define X 1\nXY X_ _X 2X X\n", "\nXY X_ _X 2X 1");
-    check(
-        "#define A 1\nhint_enum(\"A\", \"B\") // A\n/* A */ A\n",
-        "\nhint_enum(\"A\", \"B\") // A\n/* A */ 1",
-    );
+    check("#define A 1\nhint_enum(\"A\", \"B\") // A\n/* A */ A\n", "\nhint_enum(\"A\", \"B\") // A\n/* A */ 1");
 }
 
 #[test]
 fn function_like_macros() {
-    check(
-        "#define ADD(a, b) ((a) + (b))\nx = ADD(1, 2);\n",
-        "\nx = ((1) + (2));",
-    );
+    check("#define ADD(a, b) ((a) + (b))\nx = ADD(1, 2);\n", "\nx = ((1) + (2));");
     // Nested parentheses and commas inside them.
-    check(
-        "#define F(a, b) a|b\nF(g(1, 2), (3, 4))\n",
-        "\ng(1, 2)|(3, 4)",
-    );
+    check("#define F(a, b) a|b\nF(g(1, 2), (3, 4))\n", "\ng(1, 2)|(3, 4)");
     // Arguments spanning lines keep the line count (the line breaks follow the expansion).
-    check(
-        "#define F(a, b) a+b\nF(1,\n  2) tail\nnext\n",
-        "\n1+2\n tail\nnext",
-    );
+    check("#define F(a, b) a+b\nF(1,\n  2) tail\nnext\n", "\n1+2\n tail\nnext");
     // Name without `(` is left alone; `(` on the next line still counts.
     check("#define F(x) [x]\nfloat F;\nF\n(1)\n", "\nfloat F;\n[1]");
     // Continuation lines in the body.
@@ -214,24 +161,15 @@ fn token_pasting() {
         "\nvec4 tex0 = texture(material0, UV);",
     );
     // Operands of `##` are not expanded first; the pasted result is rescanned.
-    check(
-        "#define AB 7\n#define CAT(a, b) a##b\n#define A x\nCAT(A, B)\n",
-        "\n\n\n7",
-    );
+    check("#define AB 7\n#define CAT(a, b) a##b\n#define A x\nCAT(A, B)\n", "\n\n\n7");
     let r = run("#define BAD ## x\n#define BAD2(a) a ##\n");
     assert_eq!(r.codes(), vec!["E011", "E011"]);
 }
 
 #[test]
 fn nested_macros_and_argument_pre_expansion() {
-    check(
-        "#define ONE 1\n#define TWO (ONE + ONE)\nTWO\n",
-        "\n\n(1 + 1)",
-    );
-    check(
-        "#define SQ(x) ((x) * (x))\n#define N 3\nSQ(SQ(N))\n",
-        "\n\n((((3) * (3))) * (((3) * (3))))",
-    );
+    check("#define ONE 1\n#define TWO (ONE + ONE)\nTWO\n", "\n\n(1 + 1)");
+    check("#define SQ(x) ((x) * (x))\n#define N 3\nSQ(SQ(N))\n", "\n\n((((3) * (3))) * (((3) * (3))))");
     // A function-like macro named last in an expansion takes its arguments from the text after.
     check("#define F(x) <x>\n#define G F\nG(1)\n", "\n\n<1>");
     // Source map: the whole expansion maps to the outermost invocation.
@@ -267,11 +205,7 @@ fn exponential_growth_hits_the_limit_quickly() {
     assert!(start.elapsed().as_secs() < 20);
     assert_eq!(r.codes(), vec!["E017"]);
     assert_eq!(r.label_text("E017"), "M0");
-    assert!(
-        r.out.text.ends_with("M0\nafter\n"),
-        "{}",
-        &r.out.text[r.out.text.len().saturating_sub(40)..]
-    );
+    assert!(r.out.text.ends_with("M0\nafter\n"), "{}", &r.out.text[r.out.text.len().saturating_sub(40)..]);
 
     // Growth that produces nothing is bounded by the work limit.
     let mut src = String::new();
@@ -288,11 +222,7 @@ fn exponential_growth_hits_the_limit_quickly() {
     assert_eq!(r.codes(), vec!["E017"]);
 
     // Deep nesting of invocations.
-    let src = format!(
-        "#define I(x) x\n{}1{}\n",
-        "I(".repeat(5000),
-        ")".repeat(5000)
-    );
+    let src = format!("#define I(x) x\n{}1{}\n", "I(".repeat(5000), ")".repeat(5000));
     let r = run(&src);
     assert_eq!(r.codes(), vec!["E017"]);
     // A long chain of distinct macros.
@@ -324,10 +254,7 @@ fn conditionals() {
 #[test]
 fn ifdef_and_ifndef() {
     let out = run("#define A\n#ifdef A\na\n#endif\n#ifndef A\nnot_a\n#endif\n#ifdef B\nb\n#else\nnot_b\n#endif\n#ifndef B\nnot_b2\n#endif\n").out.text;
-    assert_eq!(
-        out.split_whitespace().collect::<Vec<_>>(),
-        vec!["a", "not_b", "not_b2"]
-    );
+    assert_eq!(out.split_whitespace().collect::<Vec<_>>(), vec!["a", "not_b", "not_b2"]);
     let r = run("#ifdef\n#endif\n#ifdef A B\n#endif\n");
     assert_eq!(r.codes(), vec!["E011", "E011"]);
 }
@@ -353,13 +280,13 @@ fn condition_errors() {
     assert_eq!(run("#if defined(\n#endif\n").codes(), vec!["E015"]);
     assert_eq!(run("#if defined(A B)\n#endif\n").codes(), vec!["E015"]);
     // Not evaluated in a branch already taken, or in a skipped region.
+    assert!(run("#if 1\n#elif 1/0\n#endif\n#if 0\n#if FOO\n#endif\n#endif\n").diags.is_empty());
+    // Macro arguments in a condition.
     assert!(
-        run("#if 1\n#elif 1/0\n#endif\n#if 0\n#if FOO\n#endif\n#endif\n")
+        run("#define MAX(a, b) ((a) > (b) ? (a) : (b))\n#define SUM(a, b) (a + b)\n#if SUM(1, 2) == 3\n#endif\n")
             .diags
             .is_empty()
     );
-    // Macro arguments in a condition.
-    assert!(run("#define MAX(a, b) ((a) > (b) ? (a) : (b))\n#define SUM(a, b) (a + b)\n#if SUM(1, 2) == 3\n#endif\n").diags.is_empty());
 }
 
 #[test]
@@ -376,11 +303,7 @@ fn unbalanced_conditionals() {
     assert_eq!(run("#ifdef A\n#ifndef B\n").codes(), vec!["E012", "E012"]);
     assert_eq!(run("#if 1\n#endif junk\n").codes(), vec!["E011"]);
     // A comment after `#endif` is fine.
-    assert!(
-        run("#if 1\n#endif // done\n#if 0\n#endif /* done */\n")
-            .diags
-            .is_empty()
-    );
+    assert!(run("#if 1\n#endif // done\n#if 0\n#endif /* done */\n").diags.is_empty());
 }
 
 #[test]
@@ -390,29 +313,17 @@ fn redefinition_and_undef() {
     assert_eq!(r.place("E013"), ("main.gdshader".into(), 2));
     assert_eq!(r.diags[0].labels.len(), 2);
     assert_eq!(run("#define CURRENT_RENDERER 0\n").codes(), vec!["E013"]);
-    check(
-        "#define A 1\n#undef A\n#define A 2\nA\n#undef NEVER_DEFINED\n",
-        "\n\n\n2",
-    );
+    check("#define A 1\n#undef A\n#define A 2\nA\n#undef NEVER_DEFINED\n", "\n\n\n2");
     assert_eq!(run("#undef CURRENT_RENDERER\n").codes(), vec!["E011"]);
     assert_eq!(run("#undef\n#undef A B\n").codes(), vec!["E011", "E011"]);
-    assert_eq!(
-        run("#define\n#define 1A\n#define A+B 1\n#define F() 1\n#define G(a b) 1\n").codes(),
-        vec!["E011"; 5]
-    );
+    assert_eq!(run("#define\n#define 1A\n#define A+B 1\n#define F() 1\n#define G(a b) 1\n").codes(), vec!["E011"; 5]);
 }
 
 #[test]
 fn argument_errors() {
     let r = run("#define F(a, b) a\nF(1)\nF(1, 2, 3)\nF(1, )\nok\n");
     assert_eq!(r.codes(), vec!["E014"; 3]);
-    assert!(
-        r.diags[0]
-            .message
-            .contains("takes 2 arguments but 1 was given"),
-        "{}",
-        r.diags[0].message
-    );
+    assert!(r.diags[0].message.contains("takes 2 arguments but 1 was given"), "{}", r.diags[0].message);
     assert_eq!(r.label_text("E014"), "F(1)");
     assert_eq!(squash(&r.out.text), squash("\n\n\n\nok"));
     let r = run("#define F(a) a\nF(1\nmore\n");
@@ -427,10 +338,7 @@ fn comments_hide_directives_and_macros() {
     let src = "#define A 1\n/* #define A 2\n#error no\n A */\n// #error no\nA\n/** doc A */\n";
     let r = run(src);
     assert!(r.diags.is_empty(), "{:?}", r.diags);
-    assert_eq!(
-        r.out.text,
-        "\n/* #define A 2\n#error no\n A */\n// #error no\n 1 \n/** doc A */\n"
-    );
+    assert_eq!(r.out.text, "\n/* #define A 2\n#error no\n A */\n// #error no\n 1 \n/** doc A */\n");
     // A comment on a directive line is ignored; one that continues onto later lines ends the
     // directive (as Godot strips comments first).
     let r = run("#define B 2 // two\n#define C 3 /* three\n   still */ B C\n");
@@ -497,42 +405,24 @@ fn pragmas() {
 #[test]
 fn includes() {
     let r = run_files(&[
-        (
-            "shaders/main.gdshader",
-            b"#include \"inc/a.gdshaderinc\"\nfloat m = A + B;\n",
-        ),
-        (
-            "shaders/inc/a.gdshaderinc",
-            b"#define A 1\n#include \"../common/b.gdshaderinc\"\nfloat a;\n",
-        ),
+        ("shaders/main.gdshader", b"#include \"inc/a.gdshaderinc\"\nfloat m = A + B;\n"),
+        ("shaders/inc/a.gdshaderinc", b"#define A 1\n#include \"../common/b.gdshaderinc\"\nfloat a;\n"),
         ("shaders/common/b.gdshaderinc", b"#define B 2\nfloat b;\n"),
     ]);
     assert!(r.diags.is_empty(), "{:?}", r.diags);
     // Each include's text replaces its directive line, whose line break follows it.
-    assert_eq!(
-        r.out.text.trim_end(),
-        "\n\nfloat b;\n\nfloat a;\n\nfloat m =  1  +  2 ;"
-    );
+    assert_eq!(r.out.text.trim_end(), "\n\nfloat b;\n\nfloat a;\n\nfloat m =  1  +  2 ;");
     assert_eq!(
         r.out.includes,
-        vec![
-            PathBuf::from("shaders/inc/a.gdshaderinc"),
-            PathBuf::from("shaders/common/b.gdshaderinc")
-        ]
+        vec![PathBuf::from("shaders/inc/a.gdshaderinc"), PathBuf::from("shaders/common/b.gdshaderinc")]
     );
-    assert_eq!(
-        r.locate("float b"),
-        ("shaders/common/b.gdshaderinc".into(), 2)
-    );
+    assert_eq!(r.locate("float b"), ("shaders/common/b.gdshaderinc".into(), 2));
     assert_eq!(r.locate("float a"), ("shaders/inc/a.gdshaderinc".into(), 3));
     assert_eq!(r.locate("float m"), ("shaders/main.gdshader".into(), 2));
 
     // A file is included once; later includes of it are skipped (as in Godot).
     let r = run_files(&[
-        (
-            "main.gdshader",
-            b"#include \"a.gdshaderinc\"\n#include \"./a.gdshaderinc\"\n",
-        ),
+        ("main.gdshader", b"#include \"a.gdshaderinc\"\n#include \"./a.gdshaderinc\"\n"),
         ("a.gdshaderinc", b"#define A 1\nfloat a;\n"),
     ]);
     assert!(r.diags.is_empty(), "{:?}", r.diags);
@@ -540,18 +430,12 @@ fn includes() {
 
     // res:// paths resolve against the directory holding project.godot.
     let r = run_files(&[
-        (
-            "proj/shaders/sky/main.gdshader",
-            b"#include \"res://lib/x.gdshaderinc\"\n",
-        ),
+        ("proj/shaders/sky/main.gdshader", b"#include \"res://lib/x.gdshaderinc\"\n"),
         ("proj/project.godot", b"config_version=5\n"),
         ("proj/lib/x.gdshaderinc", b"float x;\n"),
     ]);
     assert!(r.diags.is_empty(), "{:?}", r.diags);
-    assert_eq!(
-        r.out.includes,
-        vec![PathBuf::from("proj/lib/x.gdshaderinc")]
-    );
+    assert_eq!(r.out.includes, vec![PathBuf::from("proj/lib/x.gdshaderinc")]);
     // Without project.godot, against the root file's directory.
     let r = run_files(&[
         ("sky/main.gdshader", b"#include \"res://x.gdshaderinc\"\n"),
@@ -567,10 +451,7 @@ fn include_errors() {
     assert_eq!(r.place("E016"), ("main.gdshader".into(), 2));
     assert_eq!(r.label_text("E016"), "\"missing.gdshaderinc\"");
     assert!(r.diags[0].message.contains("does not exist"));
-    assert_eq!(
-        run("#include\n#include missing\n#include \"\"\n").codes(),
-        vec!["E011"; 3]
-    );
+    assert_eq!(run("#include\n#include missing\n#include \"\"\n").codes(), vec!["E011"; 3]);
 
     // Cycle.
     let r = run_files(&[
@@ -583,41 +464,20 @@ fn include_errors() {
     assert_eq!(r.place("E016"), ("main.gdshader".into(), 1));
     assert_eq!(r.label_text("E016"), "\"a.gdshaderinc\"");
     let closing = &r.diags[0].labels[1];
-    assert_eq!(
-        (
-            r.db.name(closing.file),
-            r.db.line_col(closing.file, closing.range.start).0
-        ),
-        ("b.gdshaderinc", 2)
-    );
-    assert!(
-        r.diags[0]
-            .message
-            .contains("a.gdshaderinc → b.gdshaderinc → a.gdshaderinc"),
-        "{}",
-        r.diags[0].message
-    );
+    assert_eq!((r.db.name(closing.file), r.db.line_col(closing.file, closing.range.start).0), ("b.gdshaderinc", 2));
+    assert!(r.diags[0].message.contains("a.gdshaderinc → b.gdshaderinc → a.gdshaderinc"), "{}", r.diags[0].message);
     let r = run_files(&[("main.gdshader", b"#include \"main.gdshader\"\n")]);
     assert_eq!(r.codes(), vec!["E016"]);
 
     // Depth: 25 nested includes are fine, 26 are not.
     let chain = |n: usize| {
-        let mut files: Vec<(String, Vec<u8>)> = vec![(
-            "main.gdshader".into(),
-            b"#include \"f1.gdshaderinc\"\n".to_vec(),
-        )];
+        let mut files: Vec<(String, Vec<u8>)> =
+            vec![("main.gdshader".into(), b"#include \"f1.gdshaderinc\"\n".to_vec())];
         for i in 1..=n {
-            let body = if i < n {
-                format!("#include \"f{}.gdshaderinc\"\n", i + 1)
-            } else {
-                "float deepest;\n".into()
-            };
+            let body = if i < n { format!("#include \"f{}.gdshaderinc\"\n", i + 1) } else { "float deepest;\n".into() };
             files.push((format!("f{i}.gdshaderinc"), body.into_bytes()));
         }
-        let refs: Vec<(&str, &[u8])> = files
-            .iter()
-            .map(|(n, b)| (n.as_str(), b.as_slice()))
-            .collect();
+        let refs: Vec<(&str, &[u8])> = files.iter().map(|(n, b)| (n.as_str(), b.as_slice())).collect();
         run_files(&refs)
     };
     let r = chain(25);
@@ -639,10 +499,7 @@ fn include_errors() {
     assert_eq!(r.db.line_col(l.file, l.range.start).0, 2);
 
     // Conditionals do not span files.
-    let r = run_files(&[
-        ("main.gdshader", b"#if 1\n#include \"a.gdshaderinc\"\n"),
-        ("a.gdshaderinc", b"#endif\n"),
-    ]);
+    let r = run_files(&[("main.gdshader", b"#if 1\n#include \"a.gdshaderinc\"\n"), ("a.gdshaderinc", b"#endif\n")]);
     assert_eq!(r.codes(), vec!["E012", "E012"]);
 }
 
@@ -656,24 +513,14 @@ fn includes_that_fan_out_are_bounded() {
     eprintln!("fan-out: {:?}", start.elapsed());
     assert_eq!(r.out.includes.len(), MAX_INCLUDED_FILES);
     assert!(r.diags.iter().all(|d| d.code == "E016"), "{:?}", r.diags);
-    assert!(
-        r.diags
-            .iter()
-            .any(|d| d.message.contains("more than 1024 files"))
-    );
+    assert!(r.diags.iter().any(|d| d.message.contains("more than 1024 files")));
 }
 
 #[test]
 fn source_map_after_include_points_into_the_right_file() {
     let r = run_files(&[
-        (
-            "main.gdshader",
-            b"shader_type sky;\n#include \"lib.gdshaderinc\"\nvoid sky() {\n\tCOLOR = @;\n}\n",
-        ),
-        (
-            "lib.gdshaderinc",
-            b"// helpers\nfloat helper() {\n\treturn 1.0;\n}\n",
-        ),
+        ("main.gdshader", b"shader_type sky;\n#include \"lib.gdshaderinc\"\nvoid sky() {\n\tCOLOR = @;\n}\n"),
+        ("lib.gdshaderinc", b"// helpers\nfloat helper() {\n\treturn 1.0;\n}\n"),
     ]);
     assert!(r.diags.is_empty());
     assert_eq!(r.locate("@"), ("main.gdshader".into(), 4));
@@ -681,10 +528,7 @@ fn source_map_after_include_points_into_the_right_file() {
     assert_eq!(r.locate("// helpers"), ("lib.gdshaderinc".into(), 1));
     // The same through a macro defined in the include.
     let r = run_files(&[
-        (
-            "main.gdshader",
-            b"#include \"lib.gdshaderinc\"\n\nfloat x = BAD;\n",
-        ),
+        ("main.gdshader", b"#include \"lib.gdshaderinc\"\n\nfloat x = BAD;\n"),
         ("lib.gdshaderinc", b"#define BAD @\n"),
     ]);
     assert_eq!(r.locate("@"), ("main.gdshader".into(), 3));
@@ -712,15 +556,16 @@ fn crlf_line_endings() {
 
 #[test]
 fn large_file_is_processed() {
-    let mut src =
-        String::from("shader_type sky;\n#define SCALE 2.0\n#define MIX(a, b) mix(a, b, 0.5)\n");
+    let mut src = String::from("shader_type sky;\n#define SCALE 2.0\n#define MIX(a, b) mix(a, b, 0.5)\n");
     let mut i = 0;
     while src.len() < 2 << 20 {
         src.push_str(&format!(
             "/* block {i} */\nfloat f{i}(float x) {{\n\t// line comment\n\treturn MIX(x * SCALE, x) + float({i}) + sin(x * 0.25);\n}}\n"
         ));
         if i % 50 == 0 {
-            src.push_str("#if CURRENT_RENDERER == RENDERER_FORWARD_PLUS\nconst int ok = 1;\n#else\nconst int no = 0;\n#endif\n");
+            src.push_str(
+                "#if CURRENT_RENDERER == RENDERER_FORWARD_PLUS\nconst int ok = 1;\n#else\nconst int no = 0;\n#endif\n",
+            );
         }
         i += 1;
     }
@@ -731,11 +576,7 @@ fn large_file_is_processed() {
     assert!(r.diags.is_empty());
     assert_eq!(r.out.text.matches('\n').count(), src.matches('\n').count());
     // Plain text, no directives or macros: byte-identical.
-    let plain: String = src
-        .lines()
-        .filter(|l| !l.starts_with('#'))
-        .map(|l| l.replace("MIX", "mix3") + "\n")
-        .collect();
+    let plain: String = src.lines().filter(|l| !l.starts_with('#')).map(|l| l.replace("MIX", "mix3") + "\n").collect();
     let start = Instant::now();
     let r = run(&plain);
     eprintln!("2 MB plain file: {:?}", start.elapsed());
@@ -800,19 +641,12 @@ fn random_inputs_do_not_panic() {
     };
     for _ in 0..3000 {
         let n = (next() % 60) as usize;
-        let src: String = (0..n)
-            .map(|_| PIECES[(next() % PIECES.len() as u64) as usize])
-            .collect();
-        let inc: String = (0..n)
-            .map(|_| PIECES[(next() % PIECES.len() as u64) as usize])
-            .collect();
+        let src: String = (0..n).map(|_| PIECES[(next() % PIECES.len() as u64) as usize]).collect();
+        let inc: String = (0..n).map(|_| PIECES[(next() % PIECES.len() as u64) as usize]).collect();
         let r = if next() % 2 == 0 {
             run_self(&src)
         } else {
-            run_files(&[
-                ("main.gdshader", src.as_bytes()),
-                ("a.gdshaderinc", inc.as_bytes()),
-            ])
+            run_files(&[("main.gdshader", src.as_bytes()), ("a.gdshaderinc", inc.as_bytes())])
         };
         // Every mapped offset lies inside its file.
         for at in 0..r.out.text.len() {
@@ -822,10 +656,7 @@ fn random_inputs_do_not_panic() {
         }
         for d in &r.diags {
             for l in &d.labels {
-                assert!(
-                    l.range.start <= l.range.end && l.range.end <= r.db.text(l.file).len() + 3,
-                    "{d:?} in {src:?}"
-                );
+                assert!(l.range.start <= l.range.end && l.range.end <= r.db.text(l.file).len() + 3, "{d:?} in {src:?}");
             }
         }
     }
@@ -893,10 +724,7 @@ fn stress_random_inputs() {
         "res://",
         "../",
     ];
-    let mut seed: u64 = std::env::var("SEED")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(0x9E37_79B9_7F4A_7C15);
+    let mut seed: u64 = std::env::var("SEED").ok().and_then(|s| s.parse().ok()).unwrap_or(0x9E37_79B9_7F4A_7C15);
     let mut next = || {
         seed ^= seed << 13;
         seed ^= seed >> 7;
@@ -928,11 +756,7 @@ fn stress_random_inputs() {
         let r = if iter % 2 == 0 {
             run_self(&src)
         } else {
-            run_files(&[
-                ("main.gdshader", src.as_bytes()),
-                ("a.gdshaderinc", a.as_bytes()),
-                ("b.gdshaderinc", &b),
-            ])
+            run_files(&[("main.gdshader", src.as_bytes()), ("a.gdshaderinc", a.as_bytes()), ("b.gdshaderinc", &b)])
         };
         let el = start.elapsed();
         if el > worst {
@@ -941,10 +765,7 @@ fn stress_random_inputs() {
         }
         for d in &r.diags {
             for l in &d.labels {
-                assert!(
-                    l.range.start <= l.range.end && l.range.end <= r.db.text(l.file).len() + 3,
-                    "{d:?} in {src:?}"
-                );
+                assert!(l.range.start <= l.range.end && l.range.end <= r.db.text(l.file).len() + 3, "{d:?} in {src:?}");
             }
             let _ = crate::diag::render_human(&r.db, std::slice::from_ref(d), false);
         }
@@ -954,19 +775,14 @@ fn stress_random_inputs() {
 
 #[test]
 fn dense_macro_use_stays_within_the_limits() {
-    let mut src = String::from(
-        "#define SCALE 2.0\n#define MIX(a, b) mix(a, b, 0.5)\n#define SQ(x) ((x) * (x))\n",
-    );
+    let mut src = String::from("#define SCALE 2.0\n#define MIX(a, b) mix(a, b, 0.5)\n#define SQ(x) ((x) * (x))\n");
     while src.len() < 512 << 10 {
         src.push_str("v = MIX(SQ(SCALE), SQ(MIX(SCALE, 1.0)));\n");
     }
     let r = run(&src);
     assert!(r.diags.is_empty(), "{:?}", r.diags);
     // The inner `MIX` is copied by both uses of `x` in `SQ`.
-    assert_eq!(
-        r.out.text.matches("mix(").count(),
-        3 * (src.lines().count() - 3)
-    );
+    assert_eq!(r.out.text.matches("mix(").count(), 3 * (src.lines().count() - 3));
 }
 
 /// Inputs built to be slow all stop with one error (each takes well under a second in release).

@@ -17,10 +17,7 @@ pub(crate) struct FnBuilder {
 impl FnBuilder {
     pub fn new(name: &str) -> Self {
         FnBuilder {
-            function: Function {
-                name: Some(name.into()),
-                ..Default::default()
-            },
+            function: Function { name: Some(name.into()), ..Default::default() },
             blocks: vec![Block::new()],
             emit_start: None,
         }
@@ -73,28 +70,13 @@ impl FnBuilder {
     /// Ends the nested block started by the matching [`open`](Self::open).
     pub fn close(&mut self) -> Block {
         self.flush();
-        if self.blocks.len() > 1 {
-            self.blocks.pop().unwrap_or_default()
-        } else {
-            Block::new()
-        }
+        if self.blocks.len() > 1 { self.blocks.pop().unwrap_or_default() } else { Block::new() }
     }
 
     /// A new local variable (zero-initialised), returning its pointer expression.
-    pub fn local(
-        &mut self,
-        name: Option<&str>,
-        ty: Handle<Type>,
-        span: Span,
-    ) -> Handle<Expression> {
-        let lv = self.function.local_variables.append(
-            LocalVariable {
-                name: name.map(Into::into),
-                ty,
-                init: None,
-            },
-            span,
-        );
+    pub fn local(&mut self, name: Option<&str>, ty: Handle<Type>, span: Span) -> Handle<Expression> {
+        let lv =
+            self.function.local_variables.append(LocalVariable { name: name.map(Into::into), ty, init: None }, span);
         self.expr(Expression::LocalVariable(lv), span)
     }
 
@@ -103,8 +85,7 @@ impl FnBuilder {
         self.flush();
         while self.blocks.len() > 1 {
             let inner = self.blocks.pop().unwrap_or_default();
-            self.current()
-                .push(Statement::Block(inner), Span::default());
+            self.current().push(Statement::Block(inner), Span::default());
         }
         self.function.body = self.blocks.pop().unwrap_or_default();
         self.function

@@ -5,8 +5,8 @@ use super::{GlobalConst, Lowerer, literal, scalar, span, vector_size};
 use gdshader::check::types::{Scalar as GdScalar, Type as GdType};
 use gdshader::parse::ast::{self, BinaryOp, Expr, ExprKind, ParamQualifier, UnaryOp};
 use naga::{
-    BinaryOperator as Bo, Expression as E, Handle, Literal, RelationalFunction, ScalarKind,
-    Statement, SwizzleComponent, UnaryOperator,
+    BinaryOperator as Bo, Expression as E, Handle, Literal, RelationalFunction, ScalarKind, Statement,
+    SwizzleComponent, UnaryOperator,
 };
 use std::collections::HashMap;
 
@@ -24,11 +24,7 @@ enum Place {
     /// A pointer to the whole target.
     Pointer(H),
     /// Components `pattern` of the vector behind `pointer`.
-    Swizzle {
-        pointer: H,
-        vector: GdType,
-        pattern: Vec<u8>,
-    },
+    Swizzle { pointer: H, vector: GdType, pattern: Vec<u8> },
 }
 
 /// A name in scope inside a function.
@@ -51,18 +47,11 @@ pub(crate) struct FnCtx<'l, 'a> {
     scopes: Vec<HashMap<String, LocalSlot>>,
 }
 
-const COMPONENTS: [SwizzleComponent; 4] = [
-    SwizzleComponent::X,
-    SwizzleComponent::Y,
-    SwizzleComponent::Z,
-    SwizzleComponent::W,
-];
+const COMPONENTS: [SwizzleComponent; 4] =
+    [SwizzleComponent::X, SwizzleComponent::Y, SwizzleComponent::Z, SwizzleComponent::W];
 
 fn swizzle_index(c: char) -> u8 {
-    ["xyzw", "rgba", "stpq"]
-        .iter()
-        .find_map(|set| set.find(c))
-        .unwrap_or(0) as u8
+    ["xyzw", "rgba", "stpq"].iter().find_map(|set| set.find(c)).unwrap_or(0) as u8
 }
 
 /// True when evaluating `e` can change state: assignments, `++`/`--`, and calls of user
@@ -73,39 +62,24 @@ pub(super) fn has_side_effects(lw: &Lowerer, e: &Expr) -> bool {
         ExprKind::Assign { .. } | ExprKind::IncDec { .. } => true,
         ExprKind::Call { callee, args } => {
             lw.functions.get(&callee.name).is_some_and(|fs| {
-                fs.iter().any(|f| {
-                    f.params
-                        .iter()
-                        .any(|(_, q)| matches!(q, ParamQualifier::Out | ParamQualifier::InOut))
-                })
+                fs.iter()
+                    .any(|f| f.params.iter().any(|(_, q)| matches!(q, ParamQualifier::Out | ParamQualifier::InOut)))
             }) || any(args)
         }
         ExprKind::ArrayCtor { args, .. } | ExprKind::InitList(args) => any(args),
         ExprKind::Member { base, .. } => has_side_effects(lw, base),
         ExprKind::MethodCall { base, args, .. } => has_side_effects(lw, base) || any(args),
-        ExprKind::Index { base, index } => {
-            has_side_effects(lw, base) || has_side_effects(lw, index)
-        }
+        ExprKind::Index { base, index } => has_side_effects(lw, base) || has_side_effects(lw, index),
         ExprKind::Unary { operand, .. } => has_side_effects(lw, operand),
         ExprKind::Binary { lhs, rhs, .. } => has_side_effects(lw, lhs) || has_side_effects(lw, rhs),
-        ExprKind::Ternary {
-            cond,
-            then,
-            otherwise,
-        } => [cond, then, otherwise]
-            .iter()
-            .any(|x| has_side_effects(lw, x)),
+        ExprKind::Ternary { cond, then, otherwise } => [cond, then, otherwise].iter().any(|x| has_side_effects(lw, x)),
         _ => false,
     }
 }
 
 impl<'l, 'a> FnCtx<'l, 'a> {
     pub fn new(lw: &'l mut Lowerer<'a>, ret: GdType) -> Self {
-        FnCtx {
-            lw,
-            ret,
-            scopes: vec![HashMap::new()],
-        }
+        FnCtx { lw, ret, scopes: vec![HashMap::new()] }
     }
 
     pub fn return_type(&self) -> &GdType {
@@ -122,21 +96,14 @@ impl<'l, 'a> FnCtx<'l, 'a> {
 
     /// Parameters the body assigns become locals (Godot's parameters are assignable); the others
     /// are read from the argument; `out`/`inout` ones are pointers.
-    pub fn params(
-        &mut self,
-        b: &mut FnBuilder,
-        f: &ast::Function,
-        params: &[(GdType, ParamQualifier)],
-    ) {
+    pub fn params(&mut self, b: &mut FnBuilder, f: &ast::Function, params: &[(GdType, ParamQualifier)]) {
         let mut assigned = std::collections::HashSet::new();
         let functions = &self.lw.functions;
         let is_out = |callee: &str, i: usize| {
             matches!((callee, i), ("modf" | "frexp" | "ldexp", 1))
                 || functions.get(callee).is_some_and(|fs| {
                     fs.iter().any(|f| {
-                        f.params.get(i).is_some_and(|p| {
-                            matches!(p.1, ParamQualifier::Out | ParamQualifier::InOut)
-                        })
+                        f.params.get(i).is_some_and(|p| matches!(p.1, ParamQualifier::Out | ParamQualifier::InOut))
                     })
                 })
         };
@@ -145,11 +112,7 @@ impl<'l, 'a> FnCtx<'l, 'a> {
         for (p, (ty, q)) in f.params.iter().zip(params) {
             let sp = span(p.name.span);
             let i = next_arg;
-            next_arg += if matches!(ty, GdType::Sampler(..)) {
-                2
-            } else {
-                1
-            };
+            next_arg += if matches!(ty, GdType::Sampler(..)) { 2 } else { 1 };
             if let GdType::Sampler(kind, scalar) = ty {
                 self.declare(&p.name.name, LocalSlot::Sampler(i, *kind, *scalar));
                 continue;
@@ -167,13 +130,7 @@ impl<'l, 'a> FnCtx<'l, 'a> {
             };
             let arg = b.expr(E::FunctionArgument(i), sp);
             let local = b.local(Some(&p.name.name), th, sp);
-            b.stmt(
-                Statement::Store {
-                    pointer: local,
-                    value: arg,
-                },
-                sp,
-            );
+            b.stmt(Statement::Store { pointer: local, value: arg }, sp);
             self.declare(&p.name.name, LocalSlot::Variable(local));
         }
     }
@@ -185,12 +142,7 @@ impl<'l, 'a> FnCtx<'l, 'a> {
     }
 
     /// Declares a local variable of type `ty` named `name`, returning its pointer.
-    pub fn declare_variable(
-        &mut self,
-        b: &mut FnBuilder,
-        name: &ast::Ident,
-        ty: &GdType,
-    ) -> Option<H> {
+    pub fn declare_variable(&mut self, b: &mut FnBuilder, name: &ast::Ident, ty: &GdType) -> Option<H> {
         let th = self.lw.ty(ty, name.span)?;
         let ptr = b.local(Some(&name.name), th, span(name.span));
         self.declare(&name.name, LocalSlot::Variable(ptr));
@@ -207,12 +159,8 @@ impl<'l, 'a> FnCtx<'l, 'a> {
         let sp = span(e.span);
         let name = match &e.kind {
             ExprKind::Ident(id) => {
-                if let Some(LocalSlot::Sampler(i, kind, scalar)) = self
-                    .scopes
-                    .iter()
-                    .rev()
-                    .find_map(|s| s.get(&id.name))
-                    .cloned()
+                if let Some(LocalSlot::Sampler(i, kind, scalar)) =
+                    self.scopes.iter().rev().find_map(|s| s.get(&id.name)).cloned()
                 {
                     let image = b.expr(E::FunctionArgument(i), sp);
                     let sampler = b.expr(E::FunctionArgument(i + 1), sp);
@@ -239,17 +187,11 @@ impl<'l, 'a> FnCtx<'l, 'a> {
     }
 
     pub fn type_of(&self, e: &Expr) -> Option<GdType> {
-        self.lw
-            .shader
-            .expr_types
-            .get(e.id.0 as usize)
-            .cloned()
-            .flatten()
+        self.lw.shader.expr_types.get(e.id.0 as usize).cloned().flatten()
     }
 
     pub fn unsupported<T>(&mut self, e: &Expr, what: &str) -> Option<T> {
-        self.lw
-            .error(e.span, format!("gdsky cannot translate {what} yet"));
+        self.lw.error(e.span, format!("gdsky cannot translate {what} yet"));
         None
     }
 
@@ -284,12 +226,7 @@ impl<'l, 'a> FnCtx<'l, 'a> {
         }
     }
 
-    fn literal(
-        &mut self,
-        b: &mut FnBuilder,
-        e: &Expr,
-        v: gdshader::check::consteval::ConstValue,
-    ) -> Option<Val> {
+    fn literal(&mut self, b: &mut FnBuilder, e: &Expr, v: gdshader::check::consteval::ConstValue) -> Option<Val> {
         let ty = self.type_of(e)?;
         let GdType::Scalar(s) = ty else {
             return self.unsupported(e, "a literal of this type");
@@ -312,10 +249,7 @@ impl<'l, 'a> FnCtx<'l, 'a> {
             ExprKind::ArrayCtor { args, .. } | ExprKind::InitList(args) => {
                 let ty = self.type_of(e)?;
                 let th = self.lw.ty(&ty, e.span)?;
-                let components = args
-                    .iter()
-                    .map(|a| self.value(b, a))
-                    .collect::<Option<Vec<_>>>()?;
+                let components = args.iter().map(|a| self.value(b, a)).collect::<Option<Vec<_>>>()?;
                 Some(Val::Value(b.expr(E::Compose { ty: th, components }, sp)))
             }
             ExprKind::Member { base, name } => self.member(b, e, base, name),
@@ -342,11 +276,7 @@ impl<'l, 'a> FnCtx<'l, 'a> {
                 let old = self.read_place(b, &place, target.span);
                 let one = self.one(b, &ty, e)?;
                 let new = b.expr(
-                    E::Binary {
-                        op: if op.increment { Bo::Add } else { Bo::Subtract },
-                        left: old,
-                        right: one,
-                    },
+                    E::Binary { op: if op.increment { Bo::Add } else { Bo::Subtract }, left: old, right: one },
                     sp,
                 );
                 self.write_place(b, &place, new, e.span);
@@ -368,11 +298,7 @@ impl<'l, 'a> FnCtx<'l, 'a> {
                 self.write_place(b, &place, new, e.span);
                 Some(Val::Value(new))
             }
-            ExprKind::Ternary {
-                cond,
-                then,
-                otherwise,
-            } => {
+            ExprKind::Ternary { cond, then, otherwise } => {
                 let ty = self.type_of(e)?;
                 if has_side_effects(self.lw, then) || has_side_effects(self.lw, otherwise) {
                     let th = self.lw.ty(&ty, e.span)?;
@@ -380,80 +306,32 @@ impl<'l, 'a> FnCtx<'l, 'a> {
                     let tmp = b.local(None, th, sp);
                     b.open();
                     let t = self.value(b, then)?;
-                    b.stmt(
-                        Statement::Store {
-                            pointer: tmp,
-                            value: t,
-                        },
-                        sp,
-                    );
+                    b.stmt(Statement::Store { pointer: tmp, value: t }, sp);
                     let accept = b.close();
                     b.open();
                     let o = self.value(b, otherwise)?;
-                    b.stmt(
-                        Statement::Store {
-                            pointer: tmp,
-                            value: o,
-                        },
-                        sp,
-                    );
+                    b.stmt(Statement::Store { pointer: tmp, value: o }, sp);
                     let reject = b.close();
-                    b.stmt(
-                        Statement::If {
-                            condition: c,
-                            accept,
-                            reject,
-                        },
-                        sp,
-                    );
+                    b.stmt(Statement::If { condition: c, accept, reject }, sp);
                     Some(Val::Pointer(tmp))
                 } else {
                     let c = self.value(b, cond)?;
                     let t = self.value(b, then)?;
                     let o = self.value(b, otherwise)?;
-                    if matches!(
-                        ty,
-                        GdType::Array(..) | GdType::Struct(_) | GdType::Matrix(_)
-                    ) {
+                    if matches!(ty, GdType::Array(..) | GdType::Struct(_) | GdType::Matrix(_)) {
                         // naga's Select takes scalars and vectors only.
                         let th = self.lw.ty(&ty, e.span)?;
                         let tmp = b.local(None, th, sp);
                         b.open();
-                        b.stmt(
-                            Statement::Store {
-                                pointer: tmp,
-                                value: t,
-                            },
-                            sp,
-                        );
+                        b.stmt(Statement::Store { pointer: tmp, value: t }, sp);
                         let accept = b.close();
                         b.open();
-                        b.stmt(
-                            Statement::Store {
-                                pointer: tmp,
-                                value: o,
-                            },
-                            sp,
-                        );
+                        b.stmt(Statement::Store { pointer: tmp, value: o }, sp);
                         let reject = b.close();
-                        b.stmt(
-                            Statement::If {
-                                condition: c,
-                                accept,
-                                reject,
-                            },
-                            sp,
-                        );
+                        b.stmt(Statement::If { condition: c, accept, reject }, sp);
                         return Some(Val::Pointer(tmp));
                     }
-                    Some(Val::Value(b.expr(
-                        E::Select {
-                            condition: c,
-                            accept: t,
-                            reject: o,
-                        },
-                        sp,
-                    )))
+                    Some(Val::Value(b.expr(E::Select { condition: c, accept: t, reject: o }, sp)))
                 }
             }
             ExprKind::Error => None,
@@ -468,38 +346,22 @@ impl<'l, 'a> FnCtx<'l, 'a> {
             GdType::Vector(s, n) => (*s, *n),
             _ => return self.unsupported(e, "`++`/`--` on a matrix"),
         };
-        let lit = b.expr(
-            E::Literal(literal(s, &gdshader::check::consteval::ConstValue::Int(1))?),
-            sp,
-        );
-        Some(if n == 1 {
-            lit
-        } else {
-            b.expr(
-                E::Splat {
-                    size: vector_size(n),
-                    value: lit,
-                },
-                sp,
-            )
-        })
+        let lit = b.expr(E::Literal(literal(s, &gdshader::check::consteval::ConstValue::Int(1))?), sp);
+        Some(if n == 1 { lit } else { b.expr(E::Splat { size: vector_size(n), value: lit }, sp) })
     }
 
     fn ident(&mut self, b: &mut FnBuilder, e: &Expr, id: &ast::Ident) -> Option<Val> {
         let sp = span(id.span);
-        if let Some(slot) = self
-            .scopes
-            .iter()
-            .rev()
-            .find_map(|s| s.get(&id.name))
-            .cloned()
-        {
+        if let Some(slot) = self.scopes.iter().rev().find_map(|s| s.get(&id.name)).cloned() {
             return Some(match slot {
                 LocalSlot::Variable(ptr) => Val::Pointer(ptr),
                 LocalSlot::OutParam(i) => Val::Pointer(b.expr(E::FunctionArgument(i), sp)),
                 LocalSlot::Argument(i) => Val::Value(b.expr(E::FunctionArgument(i), sp)),
                 LocalSlot::Sampler(..) => {
-                    return self.unsupported(e, "a sampler used other than as the first argument of a texture function or a call");
+                    return self.unsupported(
+                        e,
+                        "a sampler used other than as the first argument of a texture function or a call",
+                    );
                 }
             });
         }
@@ -510,38 +372,20 @@ impl<'l, 'a> FnCtx<'l, 'a> {
             };
         }
         if self.lw.textures.contains_key(&id.name) {
-            return self.unsupported(
-                e,
-                "a sampler used other than as the first argument of a texture function",
-            );
+            return self.unsupported(e, "a sampler used other than as the first argument of a texture function");
         }
         if let Some(slot) = self.lw.uniforms.get(&id.name).cloned() {
             let g = b.expr(E::GlobalVariable(slot.block), sp);
-            let ptr = b.expr(
-                E::AccessIndex {
-                    base: g,
-                    index: slot.member,
-                },
-                sp,
-            );
+            let ptr = b.expr(E::AccessIndex { base: g, index: slot.member }, sp);
             let loaded = b.expr(E::Load { pointer: ptr }, sp);
-            return self
-                .lw
-                .uniform_value(b, loaded, &slot.ty, sp)
-                .map(Val::Value);
+            return self.lw.uniform_value(b, loaded, &slot.ty, sp).map(Val::Value);
         }
         let ty = self.type_of(e)?;
         crate::wrapper::read_builtin(self.lw, b, &id.name, &ty, id.span)
             .or_else(|| self.unsupported(e, &format!("`{}`", id.name)))
     }
 
-    fn member(
-        &mut self,
-        b: &mut FnBuilder,
-        e: &Expr,
-        base: &Expr,
-        name: &ast::Ident,
-    ) -> Option<Val> {
+    fn member(&mut self, b: &mut FnBuilder, e: &Expr, base: &Expr, name: &ast::Ident) -> Option<Val> {
         let sp = span(e.span);
         let base_ty = self.type_of(base)?;
         let base_v = self.lower(b, base)?;
@@ -550,20 +394,12 @@ impl<'l, 'a> FnCtx<'l, 'a> {
                 let pattern: Vec<u8> = name.name.chars().map(swizzle_index).collect();
                 if pattern.len() == 1 {
                     return Some(match base_v {
-                        Val::Pointer(p) => Val::Pointer(b.expr(
-                            E::AccessIndex {
-                                base: p,
-                                index: u32::from(pattern[0]),
-                            },
-                            sp,
-                        )),
-                        Val::Value(v) => Val::Value(b.expr(
-                            E::AccessIndex {
-                                base: v,
-                                index: u32::from(pattern[0]),
-                            },
-                            sp,
-                        )),
+                        Val::Pointer(p) => {
+                            Val::Pointer(b.expr(E::AccessIndex { base: p, index: u32::from(pattern[0]) }, sp))
+                        }
+                        Val::Value(v) => {
+                            Val::Value(b.expr(E::AccessIndex { base: v, index: u32::from(pattern[0]) }, sp))
+                        }
                     });
                 }
                 let vector = self.load(b, base_v, base.span);
@@ -571,24 +407,14 @@ impl<'l, 'a> FnCtx<'l, 'a> {
                 for (i, &c) in pattern.iter().enumerate() {
                     comps[i] = COMPONENTS[usize::from(c)];
                 }
-                Some(Val::Value(b.expr(
-                    E::Swizzle {
-                        size: vector_size(pattern.len() as u8),
-                        vector,
-                        pattern: comps,
-                    },
-                    sp,
-                )))
+                Some(Val::Value(
+                    b.expr(E::Swizzle { size: vector_size(pattern.len() as u8), vector, pattern: comps }, sp),
+                ))
             }
             GdType::Struct(id) => {
-                let index = self
-                    .lw
-                    .shader
-                    .structs
-                    .get(id.0 as usize)?
-                    .members
-                    .iter()
-                    .position(|(m, _)| *m == name.name)? as u32;
+                let index =
+                    self.lw.shader.structs.get(id.0 as usize)?.members.iter().position(|(m, _)| *m == name.name)?
+                        as u32;
                 Some(match base_v {
                     Val::Pointer(p) => Val::Pointer(b.expr(E::AccessIndex { base: p, index }, sp)),
                     Val::Value(v) => Val::Value(b.expr(E::AccessIndex { base: v, index }, sp)),
@@ -615,33 +441,15 @@ impl<'l, 'a> FnCtx<'l, 'a> {
                 let ty = self.type_of(base)?;
                 let th = self.lw.ty(&ty, base.span)?;
                 let tmp = b.local(None, th, sp);
-                b.stmt(
-                    Statement::Store {
-                        pointer: tmp,
-                        value: v,
-                    },
-                    sp,
-                );
+                b.stmt(Statement::Store { pointer: tmp, value: v }, sp);
                 tmp
             }
         };
         Some(Val::Pointer(match constant {
-            Some(k) => b.expr(
-                E::AccessIndex {
-                    base: pointer,
-                    index: k,
-                },
-                sp,
-            ),
+            Some(k) => b.expr(E::AccessIndex { base: pointer, index: k }, sp),
             None => {
                 let i = self.value(b, index)?;
-                b.expr(
-                    E::Access {
-                        base: pointer,
-                        index: i,
-                    },
-                    sp,
-                )
+                b.expr(E::Access { base: pointer, index: i }, sp)
             }
         }))
     }
@@ -655,11 +463,7 @@ impl<'l, 'a> FnCtx<'l, 'a> {
             let Val::Pointer(pointer) = self.lower(b, base)? else {
                 return self.unsupported(target, "this assignment");
             };
-            return Some(Place::Swizzle {
-                pointer,
-                vector,
-                pattern: name.name.chars().map(swizzle_index).collect(),
-            });
+            return Some(Place::Swizzle { pointer, vector, pattern: name.name.chars().map(swizzle_index).collect() });
         }
         match self.lower(b, target)? {
             Val::Pointer(p) => Some(Place::Pointer(p)),
@@ -671,22 +475,13 @@ impl<'l, 'a> FnCtx<'l, 'a> {
         let sp = span(at);
         match place {
             Place::Pointer(p) => b.expr(E::Load { pointer: *p }, sp),
-            Place::Swizzle {
-                pointer, pattern, ..
-            } => {
+            Place::Swizzle { pointer, pattern, .. } => {
                 let v = b.expr(E::Load { pointer: *pointer }, sp);
                 let mut comps = [SwizzleComponent::X; 4];
                 for (i, &c) in pattern.iter().enumerate() {
                     comps[i] = COMPONENTS[usize::from(c)];
                 }
-                b.expr(
-                    E::Swizzle {
-                        size: vector_size(pattern.len() as u8),
-                        vector: v,
-                        pattern: comps,
-                    },
-                    sp,
-                )
+                b.expr(E::Swizzle { size: vector_size(pattern.len() as u8), vector: v, pattern: comps }, sp)
             }
         }
     }
@@ -695,11 +490,7 @@ impl<'l, 'a> FnCtx<'l, 'a> {
         let sp = span(at);
         match place {
             Place::Pointer(p) => b.stmt(Statement::Store { pointer: *p, value }, sp),
-            Place::Swizzle {
-                pointer,
-                vector,
-                pattern,
-            } => {
+            Place::Swizzle { pointer, vector, pattern } => {
                 let GdType::Vector(_, n) = vector else { return };
                 let Some(th) = self.lw.ty(vector, at) else {
                     return;
@@ -707,80 +498,31 @@ impl<'l, 'a> FnCtx<'l, 'a> {
                 let old = b.expr(E::Load { pointer: *pointer }, sp);
                 let components = (0..*n)
                     .map(|i| match pattern.iter().position(|&c| c == i) {
-                        Some(j) => b.expr(
-                            E::AccessIndex {
-                                base: value,
-                                index: j as u32,
-                            },
-                            sp,
-                        ),
-                        None => b.expr(
-                            E::AccessIndex {
-                                base: old,
-                                index: u32::from(i),
-                            },
-                            sp,
-                        ),
+                        Some(j) => b.expr(E::AccessIndex { base: value, index: j as u32 }, sp),
+                        None => b.expr(E::AccessIndex { base: old, index: u32::from(i) }, sp),
                     })
                     .collect();
                 let new = b.expr(E::Compose { ty: th, components }, sp);
-                b.stmt(
-                    Statement::Store {
-                        pointer: *pointer,
-                        value: new,
-                    },
-                    sp,
-                );
+                b.stmt(Statement::Store { pointer: *pointer, value: new }, sp);
             }
         }
     }
 
-    fn binary(
-        &mut self,
-        b: &mut FnBuilder,
-        e: &Expr,
-        op: BinaryOp,
-        lhs: &Expr,
-        rhs: &Expr,
-    ) -> Option<Val> {
+    fn binary(&mut self, b: &mut FnBuilder, e: &Expr, op: BinaryOp, lhs: &Expr, rhs: &Expr) -> Option<Val> {
         let sp = span(e.span);
-        if matches!(op, BinaryOp::LogicalAnd | BinaryOp::LogicalOr)
-            && has_side_effects(self.lw, rhs)
-        {
+        if matches!(op, BinaryOp::LogicalAnd | BinaryOp::LogicalOr) && has_side_effects(self.lw, rhs) {
             // Short-circuit explicitly: the right side must not run when the left decides.
             let bool_ty = self.lw.ty(&GdType::BOOL, e.span)?;
             let l = self.value(b, lhs)?;
             let tmp = b.local(None, bool_ty, sp);
-            b.stmt(
-                Statement::Store {
-                    pointer: tmp,
-                    value: l,
-                },
-                sp,
-            );
+            b.stmt(Statement::Store { pointer: tmp, value: l }, sp);
             b.open();
             let r = self.value(b, rhs)?;
-            b.stmt(
-                Statement::Store {
-                    pointer: tmp,
-                    value: r,
-                },
-                sp,
-            );
+            b.stmt(Statement::Store { pointer: tmp, value: r }, sp);
             let run_rhs = b.close();
-            let (accept, reject) = if op == BinaryOp::LogicalAnd {
-                (run_rhs, naga::Block::new())
-            } else {
-                (naga::Block::new(), run_rhs)
-            };
-            b.stmt(
-                Statement::If {
-                    condition: l,
-                    accept,
-                    reject,
-                },
-                sp,
-            );
+            let (accept, reject) =
+                if op == BinaryOp::LogicalAnd { (run_rhs, naga::Block::new()) } else { (naga::Block::new(), run_rhs) };
+            b.stmt(Statement::If { condition: l, accept, reject }, sp);
             return Some(Val::Pointer(tmp));
         }
         let lt = self.type_of(lhs)?;
@@ -789,90 +531,25 @@ impl<'l, 'a> FnCtx<'l, 'a> {
         let r = self.value(b, rhs)?;
         let h = match op {
             BinaryOp::Eq | BinaryOp::NotEq => {
-                let bop = if op == BinaryOp::Eq {
-                    Bo::Equal
-                } else {
-                    Bo::NotEqual
-                };
+                let bop = if op == BinaryOp::Eq { Bo::Equal } else { Bo::NotEqual };
                 match lt {
-                    GdType::Scalar(_) => b.expr(
-                        E::Binary {
-                            op: bop,
-                            left: l,
-                            right: r,
-                        },
-                        sp,
-                    ),
+                    GdType::Scalar(_) => b.expr(E::Binary { op: bop, left: l, right: r }, sp),
                     GdType::Vector(..) => {
-                        let per = b.expr(
-                            E::Binary {
-                                op: bop,
-                                left: l,
-                                right: r,
-                            },
-                            sp,
-                        );
-                        let fun = if op == BinaryOp::Eq {
-                            RelationalFunction::All
-                        } else {
-                            RelationalFunction::Any
-                        };
+                        let per = b.expr(E::Binary { op: bop, left: l, right: r }, sp);
+                        let fun = if op == BinaryOp::Eq { RelationalFunction::All } else { RelationalFunction::Any };
                         b.expr(E::Relational { fun, argument: per }, sp)
                     }
                     _ => {
-                        return self
-                            .unsupported(e, "comparing matrices, structs or arrays with `==`");
+                        return self.unsupported(e, "comparing matrices, structs or arrays with `==`");
                     }
                 }
             }
-            BinaryOp::Less => b.expr(
-                E::Binary {
-                    op: Bo::Less,
-                    left: l,
-                    right: r,
-                },
-                sp,
-            ),
-            BinaryOp::Greater => b.expr(
-                E::Binary {
-                    op: Bo::Greater,
-                    left: l,
-                    right: r,
-                },
-                sp,
-            ),
-            BinaryOp::LessEq => b.expr(
-                E::Binary {
-                    op: Bo::LessEqual,
-                    left: l,
-                    right: r,
-                },
-                sp,
-            ),
-            BinaryOp::GreaterEq => b.expr(
-                E::Binary {
-                    op: Bo::GreaterEqual,
-                    left: l,
-                    right: r,
-                },
-                sp,
-            ),
-            BinaryOp::LogicalAnd => b.expr(
-                E::Binary {
-                    op: Bo::LogicalAnd,
-                    left: l,
-                    right: r,
-                },
-                sp,
-            ),
-            BinaryOp::LogicalOr => b.expr(
-                E::Binary {
-                    op: Bo::LogicalOr,
-                    left: l,
-                    right: r,
-                },
-                sp,
-            ),
+            BinaryOp::Less => b.expr(E::Binary { op: Bo::Less, left: l, right: r }, sp),
+            BinaryOp::Greater => b.expr(E::Binary { op: Bo::Greater, left: l, right: r }, sp),
+            BinaryOp::LessEq => b.expr(E::Binary { op: Bo::LessEqual, left: l, right: r }, sp),
+            BinaryOp::GreaterEq => b.expr(E::Binary { op: Bo::GreaterEqual, left: l, right: r }, sp),
+            BinaryOp::LogicalAnd => b.expr(E::Binary { op: Bo::LogicalAnd, left: l, right: r }, sp),
+            BinaryOp::LogicalOr => b.expr(E::Binary { op: Bo::LogicalOr, left: l, right: r }, sp),
             _ => return self.arith(b, e, op, l, &lt, r, &rt).map(Val::Value),
         };
         Some(Val::Value(h))
@@ -880,25 +557,10 @@ impl<'l, 'a> FnCtx<'l, 'a> {
 
     /// Arithmetic, bitwise and shift operators, with GLSL's scalar–vector mixing made explicit.
     #[allow(clippy::too_many_arguments)]
-    fn arith(
-        &mut self,
-        b: &mut FnBuilder,
-        e: &Expr,
-        op: BinaryOp,
-        l: H,
-        lt: &GdType,
-        r: H,
-        rt: &GdType,
-    ) -> Option<H> {
+    fn arith(&mut self, b: &mut FnBuilder, e: &Expr, op: BinaryOp, l: H, lt: &GdType, r: H, rt: &GdType) -> Option<H> {
         let sp = span(e.span);
         let splat_to = |b: &mut FnBuilder, h: H, to: &GdType| match to {
-            GdType::Vector(_, n) => b.expr(
-                E::Splat {
-                    size: vector_size(*n),
-                    value: h,
-                },
-                sp,
-            ),
+            GdType::Vector(_, n) => b.expr(E::Splat { size: vector_size(*n), value: h }, sp),
             _ => h,
         };
         let (mut l, mut r) = (l, r);
@@ -937,79 +599,41 @@ impl<'l, 'a> FnCtx<'l, 'a> {
             BinaryOp::Shl | BinaryOp::Shr => {
                 // naga wants an unsigned shift amount of the left side's shape.
                 if rt.scalar() == Some(GdScalar::Int) {
-                    r = b.expr(
-                        E::As {
-                            expr: r,
-                            kind: ScalarKind::Uint,
-                            convert: Some(4),
-                        },
-                        sp,
-                    );
+                    r = b.expr(E::As { expr: r, kind: ScalarKind::Uint, convert: Some(4) }, sp);
                 }
                 if let (GdType::Vector(..), GdType::Scalar(_)) = (lt, rt) {
                     r = splat_to(b, r, lt);
                 }
-                if op == BinaryOp::Shl {
-                    Bo::ShiftLeft
-                } else {
-                    Bo::ShiftRight
-                }
+                if op == BinaryOp::Shl { Bo::ShiftLeft } else { Bo::ShiftRight }
             }
             _ => return self.unsupported(e, "this operator"),
         };
-        Some(b.expr(
-            E::Binary {
-                op: bop,
-                left: l,
-                right: r,
-            },
-            sp,
-        ))
+        Some(b.expr(E::Binary { op: bop, left: l, right: r }, sp))
     }
 
-    fn call(
-        &mut self,
-        b: &mut FnBuilder,
-        e: &Expr,
-        callee: &ast::Ident,
-        args: &[Expr],
-    ) -> Option<Val> {
+    fn call(&mut self, b: &mut FnBuilder, e: &Expr, callee: &ast::Ident, args: &[Expr]) -> Option<Val> {
         if let Some(ty) = GdType::from_name(&callee.name) {
             return self.constructor(b, e, &ty, args).map(Val::Value);
         }
         if self.lw.shader.structs.iter().any(|s| s.name == callee.name) {
             let ty = self.type_of(e)?;
             let th = self.lw.ty(&ty, e.span)?;
-            let components = args
-                .iter()
-                .map(|a| self.value(b, a))
-                .collect::<Option<Vec<_>>>()?;
-            return Some(Val::Value(
-                b.expr(E::Compose { ty: th, components }, span(e.span)),
-            ));
+            let components = args.iter().map(|a| self.value(b, a)).collect::<Option<Vec<_>>>()?;
+            return Some(Val::Value(b.expr(E::Compose { ty: th, components }, span(e.span))));
         }
-        let arg_types: Vec<GdType> = args
-            .iter()
-            .map(|a| self.type_of(a))
-            .collect::<Option<_>>()?;
-        let user = self.lw.functions.get(&callee.name).and_then(|fs| {
-            fs.iter()
-                .find(|f| f.params.iter().map(|p| &p.0).eq(arg_types.iter()))
-                .cloned()
-        });
+        let arg_types: Vec<GdType> = args.iter().map(|a| self.type_of(a)).collect::<Option<_>>()?;
+        let user = self
+            .lw
+            .functions
+            .get(&callee.name)
+            .and_then(|fs| fs.iter().find(|f| f.params.iter().map(|p| &p.0).eq(arg_types.iter())).cloned());
         if let Some(f) = user {
             return self.user_call(b, e, &f, args);
         }
         super::calls::builtin(self, b, e, callee, args, &arg_types).map(Val::Value)
     }
 
-    fn user_call(
-        &mut self,
-        b: &mut FnBuilder,
-        e: &Expr,
-        f: &super::UserFn,
-        args: &[Expr],
-    ) -> Option<Val> {
+    fn user_call(&mut self, b: &mut FnBuilder, e: &Expr, f: &super::UserFn, args: &[Expr]) -> Option<Val> {
         let sp = span(e.span);
         let mut arguments = Vec::new();
         // `out`/`inout` arguments go through temporaries: copy in, call, copy out (GLSL's rule).
@@ -1022,23 +646,14 @@ impl<'l, 'a> FnCtx<'l, 'a> {
                     let tmp = b.local(None, th, span(a.span));
                     if *q == ParamQualifier::InOut {
                         let current = self.read_place(b, &place, a.span);
-                        b.stmt(
-                            Statement::Store {
-                                pointer: tmp,
-                                value: current,
-                            },
-                            span(a.span),
-                        );
+                        b.stmt(Statement::Store { pointer: tmp, value: current }, span(a.span));
                     }
                     arguments.push(tmp);
                     copy_out.push((place, tmp, a.span));
                 }
                 _ if matches!(ty, GdType::Sampler(..)) => {
                     let Some((image, sampler, ..)) = self.sampler(b, a) else {
-                        return self.unsupported(
-                            a,
-                            "passing this sampler (a dynamically indexed sampler array)",
-                        );
+                        return self.unsupported(a, "passing this sampler (a dynamically indexed sampler array)");
                     };
                     arguments.push(image);
                     arguments.push(sampler);
@@ -1047,14 +662,7 @@ impl<'l, 'a> FnCtx<'l, 'a> {
             }
         }
         let result = (f.ret != GdType::Void).then(|| b.expr(E::CallResult(f.handle), sp));
-        b.stmt(
-            Statement::Call {
-                function: f.handle,
-                arguments,
-                result,
-            },
-            sp,
-        );
+        b.stmt(Statement::Call { function: f.handle, arguments, result }, sp);
         for (place, tmp, at) in copy_out {
             let v = b.expr(E::Load { pointer: tmp }, span(at));
             self.write_place(b, &place, v, at);
@@ -1067,13 +675,7 @@ impl<'l, 'a> FnCtx<'l, 'a> {
     }
 
     /// Scalar, vector and matrix constructors, with Godot's conversions.
-    fn constructor(
-        &mut self,
-        b: &mut FnBuilder,
-        e: &Expr,
-        ty: &GdType,
-        args: &[Expr],
-    ) -> Option<H> {
+    fn constructor(&mut self, b: &mut FnBuilder, e: &Expr, ty: &GdType, args: &[Expr]) -> Option<H> {
         let sp = span(e.span);
         let th = self.lw.ty(ty, e.span)?;
         let target = ty.scalar()?;
@@ -1085,28 +687,14 @@ impl<'l, 'a> FnCtx<'l, 'a> {
         }
         Some(match ty {
             GdType::Scalar(_) => values.first()?.0,
-            GdType::Vector(_, n)
-                if values.len() == 1 && matches!(values[0].1, GdType::Scalar(_)) =>
-            {
-                b.expr(
-                    E::Splat {
-                        size: vector_size(*n),
-                        value: values[0].0,
-                    },
-                    sp,
-                )
+            GdType::Vector(_, n) if values.len() == 1 && matches!(values[0].1, GdType::Scalar(_)) => {
+                b.expr(E::Splat { size: vector_size(*n), value: values[0].0 }, sp)
             }
             GdType::Vector(..) => {
                 if values.len() == 1 && values[0].1.components() == ty.components() {
                     return Some(values[0].0);
                 }
-                b.expr(
-                    E::Compose {
-                        ty: th,
-                        components: values.into_iter().map(|v| v.0).collect(),
-                    },
-                    sp,
-                )
+                b.expr(E::Compose { ty: th, components: values.into_iter().map(|v| v.0).collect() }, sp)
             }
             GdType::Matrix(n) => match values.as_slice() {
                 [(v, GdType::Scalar(_))] => {
@@ -1116,94 +704,41 @@ impl<'l, 'a> FnCtx<'l, 'a> {
                     let columns = (0..*n)
                         .map(|c| {
                             let comps = (0..*n).map(|r| if r == c { *v } else { zero }).collect();
-                            b.expr(
-                                E::Compose {
-                                    ty: col_ty,
-                                    components: comps,
-                                },
-                                sp,
-                            )
+                            b.expr(E::Compose { ty: col_ty, components: comps }, sp)
                         })
                         .collect();
-                    b.expr(
-                        E::Compose {
-                            ty: th,
-                            components: columns,
-                        },
-                        sp,
-                    )
+                    b.expr(E::Compose { ty: th, components: columns }, sp)
                 }
                 [(v, GdType::Matrix(m))] if m == n => *v,
                 [(v, GdType::Matrix(m))] => {
                     // GLSL: keep the overlapping block, fill the rest from the identity.
                     let (m, n) = (*m, *n);
                     let col_ty = self.lw.ty(&GdType::Vector(GdScalar::Float, n), e.span)?;
-                    let (zero, one) = (
-                        b.expr(E::Literal(Literal::F32(0.0)), sp),
-                        b.expr(E::Literal(Literal::F32(1.0)), sp),
-                    );
+                    let (zero, one) =
+                        (b.expr(E::Literal(Literal::F32(0.0)), sp), b.expr(E::Literal(Literal::F32(1.0)), sp));
                     let columns = (0..n)
                         .map(|c| {
-                            let src = (c < m).then(|| {
-                                b.expr(
-                                    E::AccessIndex {
-                                        base: *v,
-                                        index: u32::from(c),
-                                    },
-                                    sp,
-                                )
-                            });
+                            let src = (c < m).then(|| b.expr(E::AccessIndex { base: *v, index: u32::from(c) }, sp));
                             let comps = (0..n)
                                 .map(|r| match src {
-                                    Some(col) if r < m => b.expr(
-                                        E::AccessIndex {
-                                            base: col,
-                                            index: u32::from(r),
-                                        },
-                                        sp,
-                                    ),
+                                    Some(col) if r < m => b.expr(E::AccessIndex { base: col, index: u32::from(r) }, sp),
                                     _ if r == c => one,
                                     _ => zero,
                                 })
                                 .collect();
-                            b.expr(
-                                E::Compose {
-                                    ty: col_ty,
-                                    components: comps,
-                                },
-                                sp,
-                            )
+                            b.expr(E::Compose { ty: col_ty, components: comps }, sp)
                         })
                         .collect();
-                    b.expr(
-                        E::Compose {
-                            ty: th,
-                            components: columns,
-                        },
-                        sp,
-                    )
+                    b.expr(E::Compose { ty: th, components: columns }, sp)
                 }
-                _ => b.expr(
-                    E::Compose {
-                        ty: th,
-                        components: values.into_iter().map(|v| v.0).collect(),
-                    },
-                    sp,
-                ),
+                _ => b.expr(E::Compose { ty: th, components: values.into_iter().map(|v| v.0).collect() }, sp),
             },
             _ => return self.unsupported(e, "this constructor"),
         })
     }
 
     /// Converts a scalar or vector value to another scalar kind, as a constructor does.
-    pub fn convert(
-        &mut self,
-        b: &mut FnBuilder,
-        v: H,
-        from: &GdType,
-        to: GdScalar,
-        at: ast::Span,
-    ) -> H {
+    pub fn convert(&mut self, b: &mut FnBuilder, v: H, from: &GdType, to: GdScalar, at: ast::Span) -> H {
         let sp = span(at);
         let Some(from_s) = from.scalar() else {
             return v;
@@ -1212,13 +747,7 @@ impl<'l, 'a> FnCtx<'l, 'a> {
             return v;
         }
         let shape = |n: Option<u8>, b: &mut FnBuilder, h: H| match n {
-            Some(n) if n > 1 => b.expr(
-                E::Splat {
-                    size: vector_size(n),
-                    value: h,
-                },
-                sp,
-            ),
+            Some(n) if n > 1 => b.expr(E::Splat { size: vector_size(n), value: h }, sp),
             _ => h,
         };
         let n = match from {
@@ -1229,54 +758,26 @@ impl<'l, 'a> FnCtx<'l, 'a> {
             (_, GdScalar::Bool) => {
                 let zero = b.expr(
                     E::Literal(
-                        literal(from_s, &gdshader::check::consteval::ConstValue::Int(0))
-                            .unwrap_or(Literal::I32(0)),
+                        literal(from_s, &gdshader::check::consteval::ConstValue::Int(0)).unwrap_or(Literal::I32(0)),
                     ),
                     sp,
                 );
                 let zero = shape(n, b, zero);
-                b.expr(
-                    E::Binary {
-                        op: Bo::NotEqual,
-                        left: v,
-                        right: zero,
-                    },
-                    sp,
-                )
+                b.expr(E::Binary { op: Bo::NotEqual, left: v, right: zero }, sp)
             }
             (GdScalar::Bool, _) => {
                 let one = b.expr(
-                    E::Literal(
-                        literal(to, &gdshader::check::consteval::ConstValue::Int(1))
-                            .unwrap_or(Literal::I32(1)),
-                    ),
+                    E::Literal(literal(to, &gdshader::check::consteval::ConstValue::Int(1)).unwrap_or(Literal::I32(1))),
                     sp,
                 );
                 let zero = b.expr(
-                    E::Literal(
-                        literal(to, &gdshader::check::consteval::ConstValue::Int(0))
-                            .unwrap_or(Literal::I32(0)),
-                    ),
+                    E::Literal(literal(to, &gdshader::check::consteval::ConstValue::Int(0)).unwrap_or(Literal::I32(0))),
                     sp,
                 );
                 let (one, zero) = (shape(n, b, one), shape(n, b, zero));
-                b.expr(
-                    E::Select {
-                        condition: v,
-                        accept: one,
-                        reject: zero,
-                    },
-                    sp,
-                )
+                b.expr(E::Select { condition: v, accept: one, reject: zero }, sp)
             }
-            _ => b.expr(
-                E::As {
-                    expr: v,
-                    kind: scalar(to).kind,
-                    convert: Some(4),
-                },
-                sp,
-            ),
+            _ => b.expr(E::As { expr: v, kind: scalar(to).kind, convert: Some(4) }, sp),
         }
     }
 }
@@ -1294,26 +795,16 @@ fn assigned_names<'s>(
     while let Some(s) = stack.pop() {
         match &s.kind {
             StmtKind::Block(b) => stack.extend(&b.stmts),
-            StmtKind::VarDecl(d) => {
-                exprs.extend(d.declarators.iter().filter_map(|d| d.init.as_ref()))
-            }
+            StmtKind::VarDecl(d) => exprs.extend(d.declarators.iter().filter_map(|d| d.init.as_ref())),
             StmtKind::Expr(e) | StmtKind::Return(Some(e)) => exprs.push(e),
-            StmtKind::If {
-                branches,
-                otherwise,
-            } => {
+            StmtKind::If { branches, otherwise } => {
                 for (c, b) in branches {
                     exprs.push(c);
                     stack.push(b);
                 }
                 stack.extend(otherwise.as_deref());
             }
-            StmtKind::For {
-                init,
-                cond,
-                step,
-                body,
-            } => {
+            StmtKind::For { init, cond, step, body } => {
                 stack.extend(init.as_deref());
                 exprs.extend(cond);
                 exprs.extend(step);
@@ -1352,10 +843,7 @@ fn assigned_names<'s>(
             }
             ExprKind::Call { callee, args } => {
                 out.extend(
-                    args.iter()
-                        .enumerate()
-                        .filter(|(i, _)| is_out(&callee.name, *i))
-                        .filter_map(|(_, a)| root(a)),
+                    args.iter().enumerate().filter(|(i, _)| is_out(&callee.name, *i)).filter_map(|(_, a)| root(a)),
                 );
                 exprs.extend(args);
             }
@@ -1374,11 +862,7 @@ fn assigned_names<'s>(
                 exprs.push(lhs);
                 exprs.push(rhs);
             }
-            ExprKind::Ternary {
-                cond,
-                then,
-                otherwise,
-            } => exprs.extend([&**cond, &**then, &**otherwise]),
+            ExprKind::Ternary { cond, then, otherwise } => exprs.extend([&**cond, &**then, &**otherwise]),
             _ => {}
         }
     }

@@ -29,9 +29,8 @@ use gdshader::check::types::{Scalar as GdScalar, Type as GdType};
 use gdshader::parse::ast::{self, ItemKind, ParamQualifier};
 use naga::proc::{Alignment, Layouter};
 use naga::{
-    AddressSpace, ArraySize, Constant, Expression, Function, GlobalVariable, Handle, Literal,
-    MemoryDecorations, Module, ResourceBinding, Scalar, Span, StructMember, Type, TypeInner,
-    VectorSize,
+    AddressSpace, ArraySize, Constant, Expression, Function, GlobalVariable, Handle, Literal, MemoryDecorations,
+    Module, ResourceBinding, Scalar, Span, StructMember, Type, TypeInner, VectorSize,
 };
 use std::collections::HashMap;
 use std::num::NonZeroU32;
@@ -142,10 +141,7 @@ impl<'a> Lowerer<'a> {
     }
 
     pub fn error(&mut self, at: ast::Span, message: impl Into<String>) {
-        self.errors.push(LowerError {
-            span: at,
-            message: message.into(),
-        });
+        self.errors.push(LowerError { span: at, message: message.into() });
     }
 
     /// Lowers every item of the shader, then adds the entry points.
@@ -170,23 +166,15 @@ impl<'a> Lowerer<'a> {
 
     fn structs(&mut self) {
         for s in &self.shader.structs {
-            let members: Vec<(String, Handle<Type>)> = s
-                .members
-                .iter()
-                .filter_map(|(n, t)| Some((n.clone(), self.ty(t, ast::Span::default())?)))
-                .collect();
+            let members: Vec<(String, Handle<Type>)> =
+                s.members.iter().filter_map(|(n, t)| Some((n.clone(), self.ty(t, ast::Span::default())?))).collect();
             let h = self.struct_type(&s.name, &members, false);
             self.struct_types.push(h);
         }
     }
 
     /// Lays out a struct: natural (WGSL) layout, with the uniform rules when `uniform`.
-    pub fn struct_type(
-        &mut self,
-        name: &str,
-        members: &[(String, Handle<Type>)],
-        uniform: bool,
-    ) -> Handle<Type> {
+    pub fn struct_type(&mut self, name: &str, members: &[(String, Handle<Type>)], uniform: bool) -> Handle<Type> {
         let _ = self.layouter.update(self.module.to_ctx());
         let mut offset = 0u32;
         let mut align = Alignment::ONE;
@@ -198,23 +186,14 @@ impl<'a> Lowerer<'a> {
                 a = a.max(Alignment::MIN_UNIFORM);
             }
             offset = a.round_up(offset);
-            out.push(StructMember {
-                name: Some(mname.clone()),
-                ty: *mty,
-                binding: None,
-                offset,
-            });
+            out.push(StructMember { name: Some(mname.clone()), ty: *mty, binding: None, offset });
             offset += layout.size;
             align = align.max(a);
         }
         let span = align.round_up(offset);
-        self.module.types.insert(
-            Type {
-                name: Some(name.into()),
-                inner: TypeInner::Struct { members: out, span },
-            },
-            Span::UNDEFINED,
-        )
+        self.module
+            .types
+            .insert(Type { name: Some(name.into()), inner: TypeInner::Struct { members: out, span } }, Span::UNDEFINED)
     }
 
     /// An array for a uniform block: its stride rounded up to 16 bytes, as the uniform address
@@ -223,13 +202,7 @@ impl<'a> Lowerer<'a> {
         let _ = self.layouter.update(self.module.to_ctx());
         let stride = Alignment::MIN_UNIFORM.round_up(self.layouter[base].to_stride());
         let size = ArraySize::Constant(NonZeroU32::new(n).unwrap_or(NonZeroU32::MIN));
-        self.module.types.insert(
-            Type {
-                name: None,
-                inner: TypeInner::Array { base, size, stride },
-            },
-            Span::UNDEFINED,
-        )
+        self.module.types.insert(Type { name: None, inner: TypeInner::Array { base, size, stride } }, Span::UNDEFINED)
     }
 
     /// The naga type of a shader type (natural layout; `None` after reporting what cannot be
@@ -240,15 +213,10 @@ impl<'a> Lowerer<'a> {
         }
         let inner = match ty {
             GdType::Scalar(s) => TypeInner::Scalar(scalar(*s)),
-            GdType::Vector(s, n) => TypeInner::Vector {
-                size: vector_size(*n),
-                scalar: scalar(*s),
-            },
-            GdType::Matrix(n) => TypeInner::Matrix {
-                columns: vector_size(*n),
-                rows: vector_size(*n),
-                scalar: Scalar::F32,
-            },
+            GdType::Vector(s, n) => TypeInner::Vector { size: vector_size(*n), scalar: scalar(*s) },
+            GdType::Matrix(n) => {
+                TypeInner::Matrix { columns: vector_size(*n), rows: vector_size(*n), scalar: Scalar::F32 }
+            }
             GdType::Struct(id) => return self.struct_types.get(id.0 as usize).copied(),
             GdType::Array(elem, n) => {
                 let base = self.ty(elem, at)?;
@@ -263,18 +231,12 @@ impl<'a> Lowerer<'a> {
             GdType::Void | GdType::Sampler(..) => {
                 self.error(
                     at,
-                    format!(
-                        "gdsky cannot translate values of type `{}` yet",
-                        ty.display(&self.shader.struct_names())
-                    ),
+                    format!("gdsky cannot translate values of type `{}` yet", ty.display(&self.shader.struct_names())),
                 );
                 return None;
             }
         };
-        let h = self
-            .module
-            .types
-            .insert(Type { name: None, inner }, Span::UNDEFINED);
+        let h = self.module.types.insert(Type { name: None, inner }, Span::UNDEFINED);
         self.types.insert(ty.clone(), h);
         Some(h)
     }
@@ -289,11 +251,7 @@ impl<'a> Lowerer<'a> {
                 // travel as the first components of 4-vectors (std140's layout, too).
                 let base = match &**elem {
                     GdType::Scalar(s) | GdType::Vector(s, 2) => {
-                        let s = if *s == GdScalar::Bool {
-                            GdScalar::UInt
-                        } else {
-                            *s
-                        };
+                        let s = if *s == GdScalar::Bool { GdScalar::UInt } else { *s };
                         self.ty(&GdType::Vector(s, 4), at)?
                     }
                     other => self.uniform_ty(other, at)?,
@@ -317,42 +275,20 @@ impl<'a> Lowerer<'a> {
             GdType::Scalar(GdScalar::Bool) | GdType::Vector(GdScalar::Bool, _) => {
                 let zero = b.expr(Expression::Literal(Literal::U32(0)), sp);
                 let zero = match ty {
-                    GdType::Vector(_, n) => b.expr(
-                        Expression::Splat {
-                            size: vector_size(*n),
-                            value: zero,
-                        },
-                        sp,
-                    ),
+                    GdType::Vector(_, n) => b.expr(Expression::Splat { size: vector_size(*n), value: zero }, sp),
                     _ => zero,
                 };
-                b.expr(
-                    Expression::Binary {
-                        op: naga::BinaryOperator::NotEqual,
-                        left: v,
-                        right: zero,
-                    },
-                    sp,
-                )
+                b.expr(Expression::Binary { op: naga::BinaryOperator::NotEqual, left: v, right: zero }, sp)
             }
             GdType::Array(elem, n)
-                if matches!(
-                    **elem,
-                    GdType::Scalar(_) | GdType::Vector(_, 2) | GdType::Vector(GdScalar::Bool, _)
-                ) =>
+                if matches!(**elem, GdType::Scalar(_) | GdType::Vector(_, 2) | GdType::Vector(GdScalar::Bool, _)) =>
             {
                 let th = self.ty(ty, ast::Span::default())?;
                 let mut components = Vec::new();
                 for i in 0..*n {
                     let item = b.expr(Expression::AccessIndex { base: v, index: i }, sp);
                     let item = match &**elem {
-                        GdType::Scalar(_) => b.expr(
-                            Expression::AccessIndex {
-                                base: item,
-                                index: 0,
-                            },
-                            sp,
-                        ),
+                        GdType::Scalar(_) => b.expr(Expression::AccessIndex { base: item, index: 0 }, sp),
                         GdType::Vector(_, 2) => {
                             let pattern = [
                                 naga::SwizzleComponent::X,
@@ -360,14 +296,7 @@ impl<'a> Lowerer<'a> {
                                 naga::SwizzleComponent::X,
                                 naga::SwizzleComponent::X,
                             ];
-                            b.expr(
-                                Expression::Swizzle {
-                                    size: VectorSize::Bi,
-                                    vector: item,
-                                    pattern,
-                                },
-                                sp,
-                            )
+                            b.expr(Expression::Swizzle { size: VectorSize::Bi, vector: item, pattern }, sp)
                         }
                         _ => item,
                     };
@@ -390,19 +319,10 @@ impl<'a> Lowerer<'a> {
             let at = self.uniform_span(&u.name);
             if let Some(value) = self.baked.get(&u.name).cloned() {
                 // A baked uniform is a constant: the compiler folds it, and it leaves the block.
-                if let (Some(th), Some(init)) =
-                    (self.ty(&u.ty, at), self.const_expr(&u.ty, &value, at))
-                {
-                    let c = self.module.constants.append(
-                        Constant {
-                            name: Some(u.name.clone()),
-                            ty: th,
-                            init,
-                        },
-                        span(at),
-                    );
-                    self.constants
-                        .insert(u.name.clone(), GlobalConst::Module(c));
+                if let (Some(th), Some(init)) = (self.ty(&u.ty, at), self.const_expr(&u.ty, &value, at)) {
+                    let c =
+                        self.module.constants.append(Constant { name: Some(u.name.clone()), ty: th, init }, span(at));
+                    self.constants.insert(u.name.clone(), GlobalConst::Module(c));
                 }
                 continue;
             }
@@ -416,13 +336,9 @@ impl<'a> Lowerer<'a> {
                         }
                     }
                 }
-                GdType::Sampler(..) => self.error(
-                    at,
-                    format!(
-                        "gdsky cannot translate the global sampler uniform `{}` yet",
-                        u.name
-                    ),
-                ),
+                GdType::Sampler(..) => {
+                    self.error(at, format!("gdsky cannot translate the global sampler uniform `{}` yet", u.name))
+                }
                 ty => {
                     let Some(h) = self.uniform_ty(ty, at) else {
                         continue;
@@ -435,12 +351,7 @@ impl<'a> Lowerer<'a> {
         if let Some(size) = self.uniform_block(members, "Material", "material", MATERIAL_GROUP) {
             self.material_size = size;
         }
-        self.uniform_block(
-            globals,
-            "GlobalUniforms",
-            "global_uniforms",
-            GLOBAL_UNIFORM_GROUP,
-        );
+        self.uniform_block(globals, "GlobalUniforms", "global_uniforms", GLOBAL_UNIFORM_GROUP);
     }
 
     /// Declares a uniform block of `members` (name, naga type, shader type) at binding 0 of
@@ -455,8 +366,7 @@ impl<'a> Lowerer<'a> {
         if members.is_empty() {
             return None;
         }
-        let fields: Vec<(String, Handle<Type>)> =
-            members.iter().map(|(n, h, _)| (n.clone(), *h)).collect();
+        let fields: Vec<(String, Handle<Type>)> = members.iter().map(|(n, h, _)| (n.clone(), *h)).collect();
         let ty = self.struct_type(struct_name, &fields, true);
         let global = self.module.global_variables.append(
             GlobalVariable {
@@ -469,11 +379,7 @@ impl<'a> Lowerer<'a> {
             },
             Span::UNDEFINED,
         );
-        let TypeInner::Struct {
-            members: laid,
-            span,
-        } = self.module.types[ty].inner.clone()
-        else {
+        let TypeInner::Struct { members: laid, span } = self.module.types[ty].inner.clone() else {
             return None;
         };
         let _ = self.layouter.update(self.module.to_ctx());
@@ -485,15 +391,7 @@ impl<'a> Lowerer<'a> {
             };
             self.uniforms.insert(
                 name,
-                UniformSlot {
-                    block: global,
-                    group,
-                    member: i as u32,
-                    ty: gd,
-                    offset: m.offset,
-                    size,
-                    stride,
-                },
+                UniformSlot { block: global, group, member: i as u32, ty: gd, offset: m.offset, size, stride },
             );
         }
         Some(span)
@@ -502,28 +400,13 @@ impl<'a> Lowerer<'a> {
     /// Declares the texture and sampler of a sampler uniform: bindings 1 + 2k and 2 + 2k of the
     /// material group, k counting sampler uniforms in declaration order.
     fn texture(&mut self, name: &str, kind: gdshader::check::types::SamplerKind, scalar: GdScalar) {
-        let binding = 1 + 2 * self
-            .textures
-            .values()
-            .filter(|t| t.group == MATERIAL_GROUP)
-            .count() as u32;
+        let binding = 1 + 2 * self.textures.values().filter(|t| t.group == MATERIAL_GROUP).count() as u32;
         self.texture_at(name, kind, scalar, MATERIAL_GROUP, binding);
     }
 
     /// Declares one of the sky's own textures (RADIANCE, HALF_RES_COLOR, QUARTER_RES_COLOR).
-    pub fn sky_texture(
-        &mut self,
-        name: &str,
-        kind: gdshader::check::types::SamplerKind,
-        binding: u32,
-    ) {
-        self.texture_at(
-            name,
-            kind,
-            GdScalar::Float,
-            crate::wrapper::SKY_TEXTURE_GROUP,
-            binding,
-        );
+    pub fn sky_texture(&mut self, name: &str, kind: gdshader::check::types::SamplerKind, binding: u32) {
+        self.texture_at(name, kind, GdScalar::Float, crate::wrapper::SKY_TEXTURE_GROUP, binding);
     }
 
     /// The naga texture and sampler types of a sampler of `kind` holding `scalar`s.
@@ -540,28 +423,15 @@ impl<'a> Lowerer<'a> {
             K::Cube => (naga::ImageDimension::Cube, false),
             K::CubeArray => (naga::ImageDimension::Cube, true),
         };
-        let class = naga::ImageClass::Sampled {
-            kind: self::scalar(scalar).kind,
-            multi: false,
-        };
-        let image = self.module.types.insert(
-            Type {
-                name: None,
-                inner: TypeInner::Image {
-                    dim,
-                    arrayed,
-                    class,
-                },
-            },
-            Span::UNDEFINED,
-        );
-        let sampler = self.module.types.insert(
-            Type {
-                name: None,
-                inner: TypeInner::Sampler { comparison: false },
-            },
-            Span::UNDEFINED,
-        );
+        let class = naga::ImageClass::Sampled { kind: self::scalar(scalar).kind, multi: false };
+        let image = self
+            .module
+            .types
+            .insert(Type { name: None, inner: TypeInner::Image { dim, arrayed, class } }, Span::UNDEFINED);
+        let sampler = self
+            .module
+            .types
+            .insert(Type { name: None, inner: TypeInner::Sampler { comparison: false } }, Span::UNDEFINED);
         (image, sampler)
     }
 
@@ -588,23 +458,8 @@ impl<'a> Lowerer<'a> {
             )
         };
         let image = global(&mut self.module, name.to_string(), image_ty, binding);
-        let sampler = global(
-            &mut self.module,
-            format!("{name}_sampler"),
-            sampler_ty,
-            binding + 1,
-        );
-        self.textures.insert(
-            name.to_string(),
-            TextureSlot {
-                image,
-                sampler,
-                group,
-                binding,
-                kind,
-                scalar,
-            },
-        );
+        let sampler = global(&mut self.module, format!("{name}_sampler"), sampler_ty, binding + 1);
+        self.textures.insert(name.to_string(), TextureSlot { image, sampler, group, binding, kind, scalar });
     }
 
     fn uniform_span(&self, name: &str) -> ast::Span {
@@ -628,14 +483,10 @@ impl<'a> Lowerer<'a> {
                 };
                 match self.const_expr(&ty, &value, d.name.span) {
                     Some(init_h) => {
-                        let c = self.module.constants.append(
-                            Constant {
-                                name: Some(d.name.name.clone()),
-                                ty: th,
-                                init: init_h,
-                            },
-                            span(d.span),
-                        );
+                        let c = self
+                            .module
+                            .constants
+                            .append(Constant { name: Some(d.name.name.clone()), ty: th, init: init_h }, span(d.span));
                         GlobalConst::Module(c)
                     }
                     None => GlobalConst::Inline(Box::new(init.clone())),
@@ -658,46 +509,29 @@ impl<'a> Lowerer<'a> {
     }
 
     /// A constant value as a global const-expression.
-    fn const_expr(
-        &mut self,
-        ty: &GdType,
-        value: &ConstValue,
-        at: ast::Span,
-    ) -> Option<Handle<Expression>> {
+    fn const_expr(&mut self, ty: &GdType, value: &ConstValue, at: ast::Span) -> Option<Handle<Expression>> {
         let sp = span(at);
         let h = match (ty, value) {
             (GdType::Scalar(s), v) => {
                 let lit = literal(*s, v)?;
-                self.module
-                    .global_expressions
-                    .append(Expression::Literal(lit), sp)
+                self.module.global_expressions.append(Expression::Literal(lit), sp)
             }
             (GdType::Vector(s, n), ConstValue::Composite(items)) if items.len() == *n as usize => {
                 let th = self.ty(ty, at)?;
                 let mut components = Vec::new();
                 for item in items {
                     let lit = literal(*s, item)?;
-                    components.push(
-                        self.module
-                            .global_expressions
-                            .append(Expression::Literal(lit), sp),
-                    );
+                    components.push(self.module.global_expressions.append(Expression::Literal(lit), sp));
                 }
-                self.module
-                    .global_expressions
-                    .append(Expression::Compose { ty: th, components }, sp)
+                self.module.global_expressions.append(Expression::Compose { ty: th, components }, sp)
             }
-            (GdType::Array(elem, n), ConstValue::Composite(items))
-                if items.len() == *n as usize =>
-            {
+            (GdType::Array(elem, n), ConstValue::Composite(items)) if items.len() == *n as usize => {
                 let th = self.ty(ty, at)?;
                 let mut components = Vec::new();
                 for item in items {
                     components.push(self.const_expr(elem, item, at)?);
                 }
-                self.module
-                    .global_expressions
-                    .append(Expression::Compose { ty: th, components }, sp)
+                self.module.global_expressions.append(Expression::Compose { ty: th, components }, sp)
             }
             _ => return None,
         };
@@ -713,16 +547,10 @@ impl<'a> Lowerer<'a> {
         let Some(ret) = self.declared(f.name.span) else {
             return;
         };
-        let params: Vec<(GdType, ParamQualifier)> = f
-            .params
-            .iter()
-            .filter_map(|p| Some((self.declared(p.name.span)?, p.qualifier)))
-            .collect();
+        let params: Vec<(GdType, ParamQualifier)> =
+            f.params.iter().filter_map(|p| Some((self.declared(p.name.span)?, p.qualifier))).collect();
         if params.len() != f.params.len() {
-            self.error(
-                f.name.span,
-                "internal: a parameter of this function has no recorded type",
-            );
+            self.error(f.name.span, "internal: a parameter of this function has no recorded type");
             return;
         }
         let mut b = FnBuilder::new(&f.name.name);
@@ -747,13 +575,7 @@ impl<'a> Lowerer<'a> {
             };
             let arg_ty = if matches!(q, ParamQualifier::Out | ParamQualifier::InOut) {
                 self.module.types.insert(
-                    Type {
-                        name: None,
-                        inner: TypeInner::Pointer {
-                            base: th,
-                            space: AddressSpace::Function,
-                        },
-                    },
+                    Type { name: None, inner: TypeInner::Pointer { base: th, space: AddressSpace::Function } },
                     Span::UNDEFINED,
                 )
             } else {
@@ -769,10 +591,7 @@ impl<'a> Lowerer<'a> {
             let Some(th) = self.ty(&ret, f.return_type.span) else {
                 return;
             };
-            b.function.result = Some(naga::FunctionResult {
-                ty: th,
-                binding: None,
-            });
+            b.function.result = Some(naga::FunctionResult { ty: th, binding: None });
         }
         let is_sky = f.name.name == "sky";
         let mut ctx = expr::FnCtx::new(self, ret.clone());
@@ -783,14 +602,7 @@ impl<'a> Lowerer<'a> {
         if is_sky {
             self.sky_function = Some(handle);
         }
-        self.functions
-            .entry(f.name.name.clone())
-            .or_default()
-            .push(UserFn {
-                params,
-                ret,
-                handle,
-            });
+        self.functions.entry(f.name.name.clone()).or_default().push(UserFn { params, ret, handle });
     }
 }
 

@@ -39,24 +39,11 @@ impl FnCtx<'_, '_> {
     fn break_unless(&mut self, b: &mut FnBuilder, cond: &ast::Expr) {
         let sp = span(cond.span);
         let Some(c) = self.value(b, cond) else { return };
-        let not = b.expr(
-            E::Unary {
-                op: UnaryOperator::LogicalNot,
-                expr: c,
-            },
-            sp,
-        );
+        let not = b.expr(E::Unary { op: UnaryOperator::LogicalNot, expr: c }, sp);
         b.open();
         b.stmt(Statement::Break, sp);
         let accept = b.close();
-        b.stmt(
-            Statement::If {
-                condition: not,
-                accept,
-                reject: Block::new(),
-            },
-            sp,
-        );
+        b.stmt(Statement::If { condition: not, accept, reject: Block::new() }, sp);
     }
 
     pub fn stmt(&mut self, b: &mut FnBuilder, s: &Stmt) {
@@ -73,37 +60,20 @@ impl FnCtx<'_, '_> {
                     };
                     // A failed initializer (already reported) still declares the name, so its
                     // uses are not reported again.
-                    let init = d
-                        .init
-                        .as_ref()
-                        .and_then(|init| self.initial_value(b, init, &ty));
+                    let init = d.init.as_ref().and_then(|init| self.initial_value(b, init, &ty));
                     let Some(ptr) = self.declare_variable(b, &d.name, &ty) else {
                         continue;
                     };
                     if let Some(v) = init {
-                        b.stmt(
-                            Statement::Store {
-                                pointer: ptr,
-                                value: v,
-                            },
-                            span(d.span),
-                        );
+                        b.stmt(Statement::Store { pointer: ptr, value: v }, span(d.span));
                     }
                 }
             }
             StmtKind::Expr(e) => {
                 self.lower(b, e);
             }
-            StmtKind::If {
-                branches,
-                otherwise,
-            } => self.if_chain(b, branches, otherwise.as_deref()),
-            StmtKind::For {
-                init,
-                cond,
-                step,
-                body,
-            } => {
+            StmtKind::If { branches, otherwise } => self.if_chain(b, branches, otherwise.as_deref()),
+            StmtKind::For { init, cond, step, body } => {
                 b.open();
                 self.push_scope();
                 if let Some(i) = init {
@@ -120,14 +90,7 @@ impl FnCtx<'_, '_> {
                     self.lower(b, st);
                 }
                 let continuing = b.close();
-                b.stmt(
-                    Statement::Loop {
-                        body: body_block,
-                        continuing,
-                        break_if: None,
-                    },
-                    sp,
-                );
+                b.stmt(Statement::Loop { body: body_block, continuing, break_if: None }, sp);
                 self.pop_scope();
                 let outer = b.close();
                 b.stmt(Statement::Block(outer), sp);
@@ -137,14 +100,7 @@ impl FnCtx<'_, '_> {
                 self.break_unless(b, cond);
                 self.block(b, Self::stmt_as_slice(body));
                 let body_block = b.close();
-                b.stmt(
-                    Statement::Loop {
-                        body: body_block,
-                        continuing: Block::new(),
-                        break_if: None,
-                    },
-                    sp,
-                );
+                b.stmt(Statement::Loop { body: body_block, continuing: Block::new(), break_if: None }, sp);
             }
             StmtKind::DoWhile { body, cond } => {
                 let body_block = self.nested(b, Self::stmt_as_slice(body));
@@ -153,22 +109,9 @@ impl FnCtx<'_, '_> {
                     b.close();
                     return;
                 };
-                let not = b.expr(
-                    E::Unary {
-                        op: UnaryOperator::LogicalNot,
-                        expr: c,
-                    },
-                    span(cond.span),
-                );
+                let not = b.expr(E::Unary { op: UnaryOperator::LogicalNot, expr: c }, span(cond.span));
                 let continuing = b.close();
-                b.stmt(
-                    Statement::Loop {
-                        body: body_block,
-                        continuing,
-                        break_if: Some(not),
-                    },
-                    sp,
-                );
+                b.stmt(Statement::Loop { body: body_block, continuing, break_if: Some(not) }, sp);
             }
             StmtKind::Switch { selector, cases } => self.switch(b, s, selector, cases),
             StmtKind::Break => b.stmt(Statement::Break, sp),
@@ -190,12 +133,7 @@ impl FnCtx<'_, '_> {
 
     /// `if … else if … else …`: each condition is evaluated in the `else` block of the one
     /// before, so the chain nests in naga while staying flat (and iterative) here.
-    fn if_chain(
-        &mut self,
-        b: &mut FnBuilder,
-        branches: &[(ast::Expr, Stmt)],
-        otherwise: Option<&Stmt>,
-    ) {
+    fn if_chain(&mut self, b: &mut FnBuilder, branches: &[(ast::Expr, Stmt)], otherwise: Option<&Stmt>) {
         let mut pending = Vec::new();
         for (i, (cond, body)) in branches.iter().enumerate() {
             if i > 0 {
@@ -210,14 +148,7 @@ impl FnCtx<'_, '_> {
             None => Block::new(),
         };
         while let Some((condition, accept, sp)) = pending.pop() {
-            b.stmt(
-                Statement::If {
-                    condition,
-                    accept,
-                    reject,
-                },
-                sp,
-            );
+            b.stmt(Statement::If { condition, accept, reject }, sp);
             if pending.is_empty() {
                 break;
             }
@@ -225,13 +156,7 @@ impl FnCtx<'_, '_> {
         }
     }
 
-    fn switch(
-        &mut self,
-        b: &mut FnBuilder,
-        s: &Stmt,
-        selector: &ast::Expr,
-        cases: &[ast::SwitchCase],
-    ) {
+    fn switch(&mut self, b: &mut FnBuilder, s: &Stmt, selector: &ast::Expr, cases: &[ast::SwitchCase]) {
         let sp = span(s.span);
         let Some(sel) = self.value(b, selector) else {
             return;
@@ -243,25 +168,14 @@ impl FnCtx<'_, '_> {
                 None => SwitchValue::Default,
                 Some(v) => {
                     let Some(n) = case_value(v).or_else(|| self.named_case_value(v)) else {
-                        self.lw.error(
-                            v.span,
-                            "gdsky cannot translate this `case` label yet (only literal values)",
-                        );
+                        self.lw.error(v.span, "gdsky cannot translate this `case` label yet (only literal values)");
                         return;
                     };
-                    if unsigned {
-                        SwitchValue::U32(n as u32)
-                    } else {
-                        SwitchValue::I32(n as i32)
-                    }
+                    if unsigned { SwitchValue::U32(n as u32) } else { SwitchValue::I32(n as i32) }
                 }
             };
             if case.body.is_empty() && i + 1 < cases.len() {
-                out.push(SwitchCase {
-                    value,
-                    body: Block::new(),
-                    fall_through: true,
-                });
+                out.push(SwitchCase { value, body: Block::new(), fall_through: true });
                 continue;
             }
             // The case's own statements, then those of the cases it falls into, up to the first
@@ -274,26 +188,12 @@ impl FnCtx<'_, '_> {
                 }
             }
             let body = self.nested(b, &stmts);
-            out.push(SwitchCase {
-                value,
-                body,
-                fall_through: false,
-            });
+            out.push(SwitchCase { value, body, fall_through: false });
         }
         if !out.iter().any(|c| c.value == SwitchValue::Default) {
-            out.push(SwitchCase {
-                value: SwitchValue::Default,
-                body: Block::new(),
-                fall_through: false,
-            });
+            out.push(SwitchCase { value: SwitchValue::Default, body: Block::new(), fall_through: false });
         }
-        b.stmt(
-            Statement::Switch {
-                selector: sel,
-                cases: out,
-            },
-            sp,
-        );
+        b.stmt(Statement::Switch { selector: sel, cases: out }, sp);
     }
 }
 
@@ -325,10 +225,7 @@ fn ends_with_jump(s: &Stmt) -> bool {
 fn case_value(e: &ast::Expr) -> Option<i64> {
     match &e.kind {
         ast::ExprKind::IntLit(v) | ast::ExprKind::UIntLit(v) => Some(i64::from(*v)),
-        ast::ExprKind::Unary {
-            op: ast::UnaryOp::Neg,
-            operand,
-        } => case_value(operand).map(|v| -v),
+        ast::ExprKind::Unary { op: ast::UnaryOp::Neg, operand } => case_value(operand).map(|v| -v),
         _ => None,
     }
 }
