@@ -1,0 +1,124 @@
+//! Host-side checks that need no GPU: the byte layouts against naga's.
+
+use crate::*;
+use std::path::Path;
+
+fn freeman() -> gdsky_naga::Lowered {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/freeman_sky.gdshader");
+    let front = gdshader::check_file(&path).expect("fixture readable");
+    gdsky_naga::lower(&front).expect("the Freeman sky lowers")
+}
+
+/// Member offsets and the span of the struct `name` in the lowered module.
+fn struct_layout(module: &naga::Module, name: &str) -> (Vec<(String, u32)>, u32) {
+    let ty = module
+        .types
+        .iter()
+        .find(|(_, t)| t.name.as_deref() == Some(name))
+        .unwrap_or_else(|| panic!("no struct {name} in the module"));
+    match &ty.1.inner {
+        naga::TypeInner::Struct { members, span } => {
+            (members.iter().map(|m| (m.name.clone().unwrap_or_default(), m.offset)).collect(), *span)
+        }
+        other => panic!("{name} is not a struct: {other:?}"),
+    }
+}
+
+#[test]
+fn builtins_offsets_match_the_wrapper() {
+    let lowered = freeman();
+    let (members, span) = struct_layout(&lowered.module, "SkyBuiltins");
+    assert_eq!(span as usize, SkyBuiltins::SIZE);
+    let expected = [
+        ("camera_basis", offsets::CAMERA_BASIS),
+        ("position", offsets::POSITION),
+        ("time", offsets::TIME),
+        ("screen_size", offsets::SCREEN_SIZE),
+        ("tan_half_fov", offsets::TAN_HALF_FOV),
+        ("render_pass", offsets::RENDER_PASS),
+        ("luminance_multiplier", offsets::LUMINANCE_MULTIPLIER),
+        ("cube_face", offsets::CUBE_FACE),
+        ("lights", offsets::LIGHTS),
+    ];
+    let got: Vec<(&str, usize)> = members.iter().map(|(n, o)| (n.as_str(), *o as usize)).collect();
+    assert_eq!(got, expected);
+
+    let (members, span) = struct_layout(&lowered.module, "SkyLight");
+    assert_eq!(span as usize, offsets::LIGHT_STRIDE);
+    let expected = [
+        ("direction", offsets::LIGHT_DIRECTION),
+        ("energy", offsets::LIGHT_ENERGY),
+        ("color", offsets::LIGHT_COLOR),
+        ("size", offsets::LIGHT_SIZE),
+        ("enabled", offsets::LIGHT_ENABLED),
+    ];
+    let got: Vec<(&str, usize)> = members.iter().map(|(n, o)| (n.as_str(), *o as usize)).collect();
+    assert_eq!(got, expected);
+}
+
+fn f32_at(bytes: &[u8], offset: usize) -> f32 {
+    f32::from_le_bytes(bytes[offset..offset + 4].try_into().unwrap())
+}
+
+fn u32_at(bytes: &[u8], offset: usize) -> u32 {
+    u32::from_le_bytes(bytes[offset..offset + 4].try_into().unwrap())
+}
+
+#[test]
+fn builtins_bytes_from_a_scene() {
+    let scene = skyref::Scene {
+        sun_elevation_deg: 10.0,
+        sun_azimuth_deg: 30.0,
+        position: glam::DVec3::new(0.0, 1.0, 0.0),
+        pitch_deg: 10.0,
+        ..skyref::Scene::default()
+    };
+    let b = SkyBuiltins::from_scene(&scene, 64, 32).to_bytes();
+    let basis = scene.camera_basis();
+    // Column 1 (up) of the basis at 16..28, its padding lane zero.
+    assert_eq!(f32_at(&b, 16 + 4), basis.y_axis.y as f32);
+    assert_eq!(f32_at(&b, 16 + 8), basis.y_axis.z as f32);
+    assert_eq!(u32_at(&b, 28), 0);
+    assert_eq!(f32_at(&b, offsets::POSITION + 4), 1.0);
+    assert_eq!(f32_at(&b, offsets::SCREEN_SIZE), 64.0);
+    assert_eq!(f32_at(&b, offsets::SCREEN_SIZE + 4), 32.0);
+    assert_eq!(f32_at(&b, offsets::TAN_HALF_FOV), scene.tan_half_fov() as f32);
+    assert_eq!(u32_at(&b, offsets::RENDER_PASS), 0);
+    assert_eq!(f32_at(&b, offsets::LUMINANCE_MULTIPLIER), 1.0);
+    let sun = scene.light0_direction();
+    let l0 = offsets::LIGHTS;
+    assert_eq!(f32_at(&b, l0 + offsets::LIGHT_DIRECTION + 4), sun.y as f32);
+    assert_eq!(f32_at(&b, l0 + offsets::LIGHT_ENERGY), 1.0);
+    assert_eq!(f32_at(&b, l0 + offsets::LIGHT_COLOR + 8), 1.0);
+    assert_eq!(u32_at(&b, l0 + offsets::LIGHT_ENABLED), 1);
+    let l1 = offsets::LIGHTS + offsets::LIGHT_STRIDE;
+    assert!(b[l1..].iter().all(|&x| x == 0), "lights 1–3 are off");
+}
+
+#[test]
+fn freeman_material_follows_the_lowered_offsets() {
+    let lowered = freeman();
+    let params = skyref::FreemanParams::default();
+    let bytes = freeman_material(&lowered, &params);
+    assert_eq!(bytes.len(), lowered.material_size as usize);
+    assert_eq!(lowered.uniforms.len(), 22);
+    let slot = |n: &str| lowered.uniforms[n].offset as usize;
+    assert_eq!(f32_at(&bytes, slot("sun_intensity")), 62.832);
+    assert_eq!(f32_at(&bytes, slot("sun_wavelengths") + 8), 0.48);
+    assert_eq!(f32_at(&bytes, slot("planet_radius")), 6_360_000.0);
+    assert_eq!(f32_at(&bytes, slot("ground_color") + 4), 0.11);
+    assert_eq!(u32_at(&bytes, slot("view_samples")), 24);
+    assert_eq!(u32_at(&bytes, slot("sun_samples")), 8);
+}
+
+#[test]
+fn material_values_are_type_checked() {
+    let lowered = freeman();
+    let err = material_bytes(&lowered, &[("view_samples", UniformValue::Float(24.0))]).unwrap_err();
+    assert_eq!(
+        err,
+        MaterialError::TypeMismatch { name: "view_samples".into(), expected: "int".into(), given: "float".into() }
+    );
+    let err = material_bytes(&lowered, &[("no_such", UniformValue::Int(1))]).unwrap_err();
+    assert_eq!(err, MaterialError::NoSuchUniform("no_such".into()));
+}
