@@ -349,19 +349,7 @@ fn fragment(lw: &mut Lowerer, global: Handle<GlobalVariable>, projection: Projec
         b.expr(E::Math { fun, arg: args[0], arg1: args.get(1).copied(), arg2: args.get(2).copied(), arg3: None }, sp)
     };
     let frag_coord = b.expr(E::FunctionArgument(0), sp);
-    let xy = b.expr(
-        E::Swizzle {
-            size: VectorSize::Bi,
-            vector: frag_coord,
-            pattern: [
-                naga::SwizzleComponent::X,
-                naga::SwizzleComponent::Y,
-                naga::SwizzleComponent::X,
-                naga::SwizzleComponent::X,
-            ],
-        },
-        sp,
-    );
+    let xy = b.head(frag_coord, 2, sp);
     let screen = load_field(&mut b, global, &[SCREEN_SIZE], sp);
     let uv = bin(&mut b, Bo::Divide, xy, screen);
     let u = b.expr(E::AccessIndex { base: uv, index: 0 }, sp);
@@ -482,19 +470,7 @@ fn fragment(lw: &mut Lowerer, global: Handle<GlobalVariable>, projection: Projec
     {
         // Godot: if (FOG.a > 0) rgb = mix(rgb, FOG.rgb, FOG.a), never in the cubemap pass.
         let fa = b.expr(E::AccessIndex { base: fog, index: 3 }, sp);
-        let frgb = b.expr(
-            E::Swizzle {
-                size: VectorSize::Tri,
-                vector: fog,
-                pattern: [
-                    naga::SwizzleComponent::X,
-                    naga::SwizzleComponent::Y,
-                    naga::SwizzleComponent::Z,
-                    naga::SwizzleComponent::X,
-                ],
-            },
-            sp,
-        );
+        let frgb = b.head(fog, 3, sp);
         let mixed = math(&mut b, Mf::Mix, &[rgb, frgb, fa]);
         let zero = f(&mut b, 0.0);
         let has_fog = bin(&mut b, Bo::Greater, fa, zero);

@@ -73,6 +73,17 @@ impl FnBuilder {
         if self.blocks.len() > 1 { self.blocks.pop().unwrap_or_default() } else { Block::new() }
     }
 
+    /// The first `size` components of `vector` (`.xy`, `.xyz`).
+    pub fn head(&mut self, vector: Handle<Expression>, size: u8, span: Span) -> Handle<Expression> {
+        use naga::SwizzleComponent::{W, X, Y, Z};
+        let size = match size {
+            2 => naga::VectorSize::Bi,
+            3 => naga::VectorSize::Tri,
+            _ => naga::VectorSize::Quad,
+        };
+        self.expr(Expression::Swizzle { size, vector, pattern: [X, Y, Z, W] }, span)
+    }
+
     /// A new local variable (zero-initialised), returning its pointer expression.
     pub fn local(&mut self, name: Option<&str>, ty: Handle<Type>, span: Span) -> Handle<Expression> {
         let lv =

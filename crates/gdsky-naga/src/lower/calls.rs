@@ -367,13 +367,7 @@ fn texture_call(
         if !arrayed {
             return (coord, None);
         }
-        let pattern = [
-            naga::SwizzleComponent::X,
-            naga::SwizzleComponent::Y,
-            naga::SwizzleComponent::Z,
-            naga::SwizzleComponent::X,
-        ];
-        let xy = b.expr(E::Swizzle { size: vector_size(n - 1), vector: coord, pattern }, sp);
+        let xy = b.head(coord, n - 1, sp);
         let layer = b.expr(E::AccessIndex { base: coord, index: u32::from(n - 1) }, sp);
         (xy, Some(layer))
     };
@@ -410,13 +404,7 @@ fn texture_call(
         // textureProj divides the coordinate by its last component.
         let last = b.expr(E::AccessIndex { base: p, index: u32::from(width - 1) }, sp);
         let n = if matches!(kind, K::Tex3D) { 3 } else { 2 };
-        let pattern = [
-            naga::SwizzleComponent::X,
-            naga::SwizzleComponent::Y,
-            naga::SwizzleComponent::Z,
-            naga::SwizzleComponent::X,
-        ];
-        let head = b.expr(E::Swizzle { size: vector_size(n), vector: p, pattern }, sp);
+        let head = b.head(p, n, sp);
         let last = b.expr(E::Splat { size: vector_size(n), value: last }, sp);
         b.expr(E::Binary { op: Bo::Divide, left: head, right: last }, sp)
     };

@@ -289,15 +289,7 @@ impl<'a> Lowerer<'a> {
                     let item = b.expr(Expression::AccessIndex { base: v, index: i }, sp);
                     let item = match &**elem {
                         GdType::Scalar(_) => b.expr(Expression::AccessIndex { base: item, index: 0 }, sp),
-                        GdType::Vector(_, 2) => {
-                            let pattern = [
-                                naga::SwizzleComponent::X,
-                                naga::SwizzleComponent::Y,
-                                naga::SwizzleComponent::X,
-                                naga::SwizzleComponent::X,
-                            ];
-                            b.expr(Expression::Swizzle { size: VectorSize::Bi, vector: item, pattern }, sp)
-                        }
+                        GdType::Vector(_, 2) => b.head(item, 2, sp),
                         _ => item,
                     };
                     components.push(self.uniform_value(b, item, elem, sp)?);
