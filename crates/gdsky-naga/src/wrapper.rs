@@ -305,18 +305,7 @@ fn vertex(lw: &mut Lowerer) {
     let y = b.expr(E::Binary { op: Bo::Subtract, left: y2, right: one }, sp);
     let pos = b.expr(E::Compose { ty: v4, components: vec![x, y, zero, one] }, sp);
     b.stmt(Statement::Return { value: Some(pos) }, sp);
-    let function = b.finish();
-    lw.module.entry_points.push(EntryPoint {
-        name: "vs_main".into(),
-        stage: ShaderStage::Vertex,
-        early_depth_test: None,
-        workgroup_size: [0; 3],
-        workgroup_size_overrides: None,
-        function,
-        mesh_info: None,
-        task_payload: None,
-        incoming_ray_payload: None,
-    });
+    add_entry_point(lw, "vs_main", ShaderStage::Vertex, b);
 }
 
 fn fragment(lw: &mut Lowerer, global: Handle<GlobalVariable>, projection: Projection) {
@@ -486,18 +475,7 @@ fn fragment(lw: &mut Lowerer, global: Handle<GlobalVariable>, projection: Projec
     let alpha = b.expr(E::Select { condition: full, accept: zero, reject: alpha }, sp);
     let out = b.expr(E::Compose { ty: v4t, components: vec![rgb, alpha] }, sp);
     b.stmt(Statement::Return { value: Some(out) }, sp);
-    let function = b.finish();
-    lw.module.entry_points.push(EntryPoint {
-        name: projection.entry_point().into(),
-        stage: ShaderStage::Fragment,
-        early_depth_test: None,
-        workgroup_size: [0; 3],
-        workgroup_size_overrides: None,
-        function,
-        mesh_info: None,
-        task_payload: None,
-        incoming_ray_payload: None,
-    });
+    add_entry_point(lw, projection.entry_point(), ShaderStage::Fragment, b);
 }
 
 /// The basis of the cube face selected by the `cube_face` field, from a constant table.
@@ -540,4 +518,19 @@ fn cube_basis(lw: &mut Lowerer, b: &mut FnBuilder, global: Handle<GlobalVariable
     b.stmt(Statement::Store { pointer: tmp, value: c }, sp);
     let p = b.expr(E::Access { base: tmp, index: face }, sp);
     b.expr(E::Load { pointer: p }, sp)
+}
+
+/// Adds a finished entry-point function to the module.
+fn add_entry_point(lw: &mut Lowerer, name: &str, stage: ShaderStage, b: FnBuilder) {
+    lw.module.entry_points.push(EntryPoint {
+        name: name.into(),
+        stage,
+        early_depth_test: None,
+        workgroup_size: [0; 3],
+        workgroup_size_overrides: None,
+        function: b.finish(),
+        mesh_info: None,
+        task_payload: None,
+        incoming_ray_payload: None,
+    });
 }
