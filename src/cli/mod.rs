@@ -1,7 +1,11 @@
 //! One module per subcommand, and what they share.
 
 pub mod check;
+pub mod compare;
 pub mod convert;
+pub mod demo;
+pub mod render;
+pub mod scene;
 
 use std::io::Write;
 use std::path::Path;

@@ -105,7 +105,7 @@ pub mod converged;
 mod params;
 mod precision;
 
-pub use params::{FreemanParams, Projection, Scene};
+pub use params::{FreemanParams, Projection, Scene, UniformMut, cube_face_basis};
 
 /// The Freeman sky in single precision (`f32`, `glam::Vec3`, `glam::Vec2`): what a GPU computes.
 pub mod f32 {

@@ -97,7 +97,67 @@ impl Default for FreemanParams {
     }
 }
 
+/// One uniform of the Freeman sky, borrowed mutably from [`FreemanParams`].
+#[derive(Debug)]
+pub enum UniformMut<'a> {
+    /// A `float` uniform.
+    Float(&'a mut f64),
+    /// A `vec3` uniform.
+    Vec3(&'a mut DVec3),
+    /// An `int` uniform.
+    Int(&'a mut i32),
+}
+
 impl FreemanParams {
+    /// Every uniform with the shader's name, in declaration order: the one table that maps the
+    /// shader's names to these fields (material bytes, `--set` on the command line).
+    pub fn uniforms_mut(&mut self) -> [(&'static str, UniformMut<'_>); 22] {
+        use UniformMut::{Float, Int, Vec3};
+        [
+            ("sun_intensity", Float(&mut self.sun_intensity)),
+            ("sun_wavelengths", Vec3(&mut self.sun_wavelengths)),
+            ("rayleigh_scale_height", Float(&mut self.rayleigh_scale_height)),
+            ("rayleigh_multi_scattering", Float(&mut self.rayleigh_multi_scattering)),
+            ("mie_scale_height", Float(&mut self.mie_scale_height)),
+            ("mie_scattering", Float(&mut self.mie_scattering)),
+            ("mie_albedo", Float(&mut self.mie_albedo)),
+            ("mie_g_forward", Float(&mut self.mie_g_forward)),
+            ("mie_g_backward", Float(&mut self.mie_g_backward)),
+            ("mie_weight", Float(&mut self.mie_weight)),
+            ("mie_multi_scattering", Float(&mut self.mie_multi_scattering)),
+            ("multiscattering_mie_g_forward", Float(&mut self.multiscattering_mie_g_forward)),
+            ("multiscattering_mie_g_backward", Float(&mut self.multiscattering_mie_g_backward)),
+            ("multiscattering_mie_weight", Float(&mut self.multiscattering_mie_weight)),
+            ("ozone_center", Float(&mut self.ozone_center)),
+            ("ozone_width", Float(&mut self.ozone_width)),
+            ("planet_radius", Float(&mut self.planet_radius)),
+            ("atmosphere_height", Float(&mut self.atmosphere_height)),
+            ("base_altitude", Float(&mut self.base_altitude)),
+            ("ground_color", Vec3(&mut self.ground_color)),
+            ("view_samples", Int(&mut self.view_samples)),
+            ("sun_samples", Int(&mut self.sun_samples)),
+        ]
+    }
+
+    /// Sets the uniform `name` from text as `gdsky --set` takes it (`1.5`, `24`,
+    /// `0.1,0.2,0.3`).
+    pub fn set(&mut self, name: &str, text: &str) -> Result<(), String> {
+        let bad = |what: &str| format!("`{name}={text}`: expected {what}");
+        let number = |t: &str| t.trim().parse::<f64>().map_err(|_| bad("a number"));
+        let slot = self.uniforms_mut().into_iter().find(|(n, _)| *n == name).map(|(_, u)| u);
+        match slot {
+            Some(UniformMut::Float(v)) => *v = number(text)?,
+            Some(UniformMut::Int(v)) => *v = text.trim().parse().map_err(|_| bad("an int"))?,
+            Some(UniformMut::Vec3(v)) => {
+                let parts = text.split(',').map(number).collect::<Result<Vec<_>, _>>()?;
+                let [x, y, z] = parts[..] else { return Err(bad("three comma-separated numbers")) };
+                *v = DVec3::new(x, y, z);
+            }
+            None => return Err(format!("the Freeman sky has no uniform `{name}`")),
+        }
+        Ok(())
+    }
+
     /// The same parameters with other sample counts (`view_samples`, `sun_samples`).
     #[must_use]
     pub fn with_samples(self, view_samples: i32, sun_samples: i32) -> Self {
@@ -177,4 +237,26 @@ pub enum Projection {
     /// `fs_camera`: EYEDIR = normalize(basis · ((2u−1)·t·W/H, (1−2v)·t, −1)) with
     /// t = tan(fov/2) and the basis of [`Scene::camera_basis`].
     Camera,
+    /// `fs_cubemap`, one face of Godot's radiance cubemap (0..6: +X, −X, +Y, −Y, +Z, −Z):
+    /// the camera formula with t = 1 and the face's basis ([`cube_face_basis`]); the scene's
+    /// camera is not used.
+    CubeFace(u8),
+}
+
+/// The basis Godot 4.3–4.5 renders cubemap face `face` with (`Basis::looking_at(normal, up)`
+/// for the normals +X, −X, +Y, −Y, +Z, −Z with ups −Y, −Y, +Z, −Z, −Y, −Y), as columns
+/// x, y, z. Faces above 5 are taken as 5. gdsky's wrapper bakes the same table in f32; a test
+/// in skyrun holds the two together.
+pub fn cube_face_basis(face: u8) -> DMat3 {
+    let (target, up) = match face {
+        0 => (DVec3::X, DVec3::NEG_Y),
+        1 => (DVec3::NEG_X, DVec3::NEG_Y),
+        2 => (DVec3::Y, DVec3::Z),
+        3 => (DVec3::NEG_Y, DVec3::NEG_Z),
+        4 => (DVec3::Z, DVec3::NEG_Y),
+        _ => (DVec3::NEG_Z, DVec3::NEG_Y),
+    };
+    let z = -target;
+    let x = up.cross(z);
+    DMat3::from_cols(x, z.cross(x), z)
 }

@@ -527,10 +527,13 @@ macro_rules! freeman_sky {
                     let (sphi, cphi) = (phi.sin(), phi.cos());
                     $V3::new(st * sphi, ct, -(st * cphi))
                 }
-                Projection::Camera => {
-                    let b = scene.camera_basis();
+                Projection::Camera | Projection::CubeFace(_) => {
+                    let (b, t) = match projection {
+                        Projection::CubeFace(face) => (crate::cube_face_basis(face), 1.0),
+                        _ => (scene.camera_basis(), scene.tan_half_fov()),
+                    };
                     let basis = $M3::from_cols(v3(b.x_axis), v3(b.y_axis), v3(b.z_axis));
-                    let t = s(scene.tan_half_fov());
+                    let t = s(t);
                     let nx = u * 2.0 - 1.0;
                     let ny = 1.0 - v * 2.0;
                     let aspect = screen.x / screen.y;

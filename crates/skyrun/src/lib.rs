@@ -21,20 +21,34 @@
 //! * [`material_bytes`] writes uniform values into the material block (group 1) at the offsets
 //!   the lowering reports ([`gdsky_naga::Lowered::uniforms`]) after checking each value's type;
 //!   [`freeman_material`] does it for all 22 Freeman uniforms from a [`skyref::FreemanParams`].
-//! * [`render`] compiles the WGSL, builds a pipeline from `vs_main` (a fullscreen triangle) and
-//!   the projection's fragment entry (`fs_panorama` or `fs_camera`) with explicit bind group
-//!   layouts, draws into an Rgba32Float target, copies it to a buffer with rows padded to
-//!   wgpu's 256-byte alignment, waits for the device and returns the pixels row 0 at the top.
-//!   Every wgpu error is caught in error scopes and returned as a [`RenderError`] (an invalid
+//! * [`SkyShader`] compiles a WGSL module once, reads every resource it declares with naga
+//!   ([`bindings::discover`]) and builds explicit bind group layouts from them, so converted
+//!   modules and hand-written WGSL with the same interface render alike. [`SkyShader::render`]
+//!   draws `vs_main` (a fullscreen triangle) and the projection's fragment entry (`fs_panorama`,
+//!   `fs_camera`, or `fs_cubemap` for [`Projection::CubeFace`]) into an Rgba32Float target,
+//!   copies it to a buffer with rows padded to wgpu's 256-byte alignment, waits for the device
+//!   and returns the pixels row 0 at the top, with the submit-to-idle time
+//!   ([`Rendered::gpu_wait`]). Pipelines are cached per entry point and format. Every wgpu
+//!   error on the way is caught in error scopes and returned as a [`RenderError`] (an invalid
 //!   WGSL comes back with naga's message), never a panic from wgpu's default handler.
+//! * Godot's sub-passes ([`SubPasses`], from the shader's `use_half_res_pass` /
+//!   `use_quarter_res_pass`): the quarter-resolution pass, then the half-resolution pass (which
+//!   can read the quarter one), then the full pass, each at screen/2 or screen/4 (at least 4
+//!   pixels) into RGBA16F as in Godot, all in one command buffer; a sub-pass is drawn when the
+//!   shader asked for it and reads its texture. Stand-ins where the scene has nothing to give,
+//!   as Godot binds them: a sub-pass texture not rendered (or the one being rendered) is white,
+//!   RADIANCE and, in the cubemap pass, the sub-pass textures are black (Godot's cubemap pass
+//!   reads half/quarter *cubemaps*, which the harness does not render), material textures are
+//!   white, global uniforms (group 3) zero. Storage buffers, comparison samplers and binding
+//!   arrays are refused by name ([`bindings::BindingError`]).
+//! * [`material_with_defaults`] fills the material block of any shader from its own defaults
+//!   plus `--set`-style overrides.
+//! * [`write_exr`] / [`read_exr`] (RGBA f32, ZIP, row 0 at the top, written atomically),
+//!   [`write_png_preview`] (Bruneton's demo tone map), [`write_heatmap_png`] (log-scale relative
+//!   error), [`write_side_by_side_png`].
 //! * [`compare`] reduces two images to relative-error statistics over RGB
-//!   (|a − b| / max(|b|, floor): max, p99.9, p99, mean, NaN and Inf counts), and
+//!   (|a − b| / max(|b|, floor): max, p99.9, p99, mean, PSNR, NaN and Inf counts), and
 //!   [`worst_pixels`] lists where the largest differences are, with both pixels' values.
-//!
-//! The harness is deliberately small: one render per call (module and pipeline are rebuilt
-//! each time), uniforms only. Shaders that bind textures (material samplers, the sky's
-//! RADIANCE / half / quarter maps in group 2) or global uniforms (group 3) fail at pipeline
-//! creation with a clear wgpu error rather than being half supported.
 //!
 //! ## What it measured
 //!
@@ -47,6 +61,11 @@
 //! | --- | --- | --- | --- | --- | --- |
 //! | panorama | 4.7e-6 | 2.1e-6 | 1.7e-6 | 1.6e-7 | 0 / 0 |
 //! | camera, fov 90°, pitch 10° | 6.3e-7 | 4.6e-7 | 3.5e-7 | 1.1e-7 | 0 / 0 |
+//!
+//! The full scene matrix (sun −4° … 90°, camera at 1 m, 2 km and 30 km, both projections) is
+//! `tests/freeman_matrix.rs`, with its thresholds argued in its header; the sub-passes are
+//! tested in `tests/sub_passes.rs`; `benches/render.rs` times the converted shader against a
+//! hand-written WGSL port.
 //!
 //! That is a few f32 ulps: far below the f32-versus-f64 difference skyref documents for the
 //! same scene (p99 7.8e-5), so the GPU computes the reference's f32 arithmetic almost
@@ -81,17 +100,25 @@
 
 #![warn(missing_docs)]
 
+pub mod bindings;
 mod builtins;
 mod gpu;
+mod imageio;
 mod material;
 mod metrics;
 mod render;
 
 pub use builtins::{RenderPass, SkyBuiltins, SkyLight, offsets};
 pub use gpu::{AdapterSummary, Gpu, NoAdapter};
-pub use material::{MaterialError, UniformValue, freeman_material, freeman_values, material_bytes};
+pub use imageio::{
+    DEFAULT_EXPOSURE, DEFAULT_WHITE, Image, ImageError, read_exr, write_exr, write_heatmap_png, write_png_preview,
+    write_side_by_side_png,
+};
+pub use material::{
+    MaterialError, UniformValue, freeman_material, freeman_values, material_bytes, material_with_defaults,
+};
 pub use metrics::{Metrics, PixelDiff, compare, worst_pixels};
-pub use render::{RenderError, fragment_entry, render};
+pub use render::{RenderError, Rendered, SkyShader, SubPasses, fragment_entry, render, sub_pass_size};
 pub use skyref::Projection;
 
 #[cfg(test)]

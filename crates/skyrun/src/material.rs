@@ -71,6 +71,13 @@ pub enum MaterialError {
         /// The type of the value given.
         given: String,
     },
+    /// An override's text does not parse as the uniform's type.
+    BadValue {
+        /// The uniform.
+        name: String,
+        /// What is wrong with the text.
+        message: String,
+    },
 }
 
 impl fmt::Display for MaterialError {
@@ -82,6 +89,7 @@ impl fmt::Display for MaterialError {
             MaterialError::TypeMismatch { name, expected, given } => {
                 write!(f, "uniform `{name}` is `{expected}` in the shader, but a `{given}` value was given")
             }
+            MaterialError::BadValue { name, message } => write!(f, "uniform `{name}`: {message}"),
         }
     }
 }
@@ -115,34 +123,19 @@ pub fn material_bytes(lowered: &Lowered, values: &[(&str, UniformValue)]) -> Res
 /// The 22 uniforms of `fixtures/freeman_sky.gdshader` from skyref's parameters, with the
 /// shader's names and types, rounded to f32 as a host fills the buffer.
 pub fn freeman_values(params: &skyref::FreemanParams) -> Vec<(&'static str, UniformValue)> {
-    use UniformValue::{Float, Int, Vec3};
-    let f = |v: f64| Float(v as f32);
-    let v3 = |v: glam::DVec3| Vec3([v.x as f32, v.y as f32, v.z as f32]);
-    let p = params;
-    vec![
-        ("sun_intensity", f(p.sun_intensity)),
-        ("sun_wavelengths", v3(p.sun_wavelengths)),
-        ("rayleigh_scale_height", f(p.rayleigh_scale_height)),
-        ("rayleigh_multi_scattering", f(p.rayleigh_multi_scattering)),
-        ("mie_scale_height", f(p.mie_scale_height)),
-        ("mie_scattering", f(p.mie_scattering)),
-        ("mie_albedo", f(p.mie_albedo)),
-        ("mie_g_forward", f(p.mie_g_forward)),
-        ("mie_g_backward", f(p.mie_g_backward)),
-        ("mie_weight", f(p.mie_weight)),
-        ("mie_multi_scattering", f(p.mie_multi_scattering)),
-        ("multiscattering_mie_g_forward", f(p.multiscattering_mie_g_forward)),
-        ("multiscattering_mie_g_backward", f(p.multiscattering_mie_g_backward)),
-        ("multiscattering_mie_weight", f(p.multiscattering_mie_weight)),
-        ("ozone_center", f(p.ozone_center)),
-        ("ozone_width", f(p.ozone_width)),
-        ("planet_radius", f(p.planet_radius)),
-        ("atmosphere_height", f(p.atmosphere_height)),
-        ("base_altitude", f(p.base_altitude)),
-        ("ground_color", v3(p.ground_color)),
-        ("view_samples", Int(p.view_samples)),
-        ("sun_samples", Int(p.sun_samples)),
-    ]
+    let mut params = *params;
+    params
+        .uniforms_mut()
+        .into_iter()
+        .map(|(name, value)| {
+            let value = match value {
+                skyref::UniformMut::Float(v) => UniformValue::Float(*v as f32),
+                skyref::UniformMut::Vec3(v) => UniformValue::Vec3([v.x as f32, v.y as f32, v.z as f32]),
+                skyref::UniformMut::Int(v) => UniformValue::Int(*v),
+            };
+            (name, value)
+        })
+        .collect()
 }
 
 /// The material block of a lowered Freeman sky filled from `params`. Uniforms baked into
@@ -155,4 +148,75 @@ pub fn freeman_material(lowered: &Lowered, params: &skyref::FreemanParams) -> Ve
     let values: Vec<_> =
         freeman_values(params).into_iter().filter(|(name, _)| lowered.uniforms.contains_key(*name)).collect();
     material_bytes(lowered, &values).unwrap_or_else(|e| panic!("the lowered shader is not the Freeman sky: {e}"))
+}
+
+/// The material block of any checked, lowered shader: every uniform at its shader default
+/// (zero where the shader gives none, as Godot does), then each `(name, text)` override parsed
+/// like `gdsky convert --set` (`1.5`, `24`, `true`, `0.1,0.2,0.3`).
+///
+/// Scalars, vectors, matrices (columns 16 bytes apart) and arrays (at the lowering's stride) are
+/// written; bools travel as `u32`. Overrides of unknown, baked, global or sampler uniforms are
+/// errors.
+pub fn material_with_defaults(
+    shader: &gdshader::CheckedShader,
+    lowered: &Lowered,
+    overrides: &[(String, String)],
+) -> Result<Vec<u8>, MaterialError> {
+    let mut bytes = vec![0u8; lowered.material_size as usize];
+    let in_block = |name: &str| lowered.uniforms.get(name).filter(|slot| slot.group == MATERIAL_GROUP);
+    for u in &shader.uniforms {
+        if let (Some(slot), Some(default)) = (in_block(&u.name), &u.default) {
+            write_const(&mut bytes, slot.offset as usize, &slot.ty, default, slot.stride.unwrap_or(16) as usize);
+        }
+    }
+    for (name, text) in overrides {
+        let slot = in_block(name).ok_or_else(|| MaterialError::NoSuchUniform(name.clone()))?;
+        let value = gdsky_naga::reflect::parse_value(&slot.ty, text)
+            .map_err(|message| MaterialError::BadValue { name: name.clone(), message })?;
+        write_const(&mut bytes, slot.offset as usize, &slot.ty, &value, slot.stride.unwrap_or(16) as usize);
+    }
+    Ok(bytes)
+}
+
+/// Writes a constant of type `ty` at `offset` with the uniform address space's layout.
+fn write_const(
+    bytes: &mut [u8],
+    offset: usize,
+    ty: &Type,
+    value: &gdshader::check::consteval::ConstValue,
+    stride: usize,
+) {
+    use gdshader::check::consteval::ConstValue;
+    let scalar = |bytes: &mut [u8], at: usize, s: Scalar, v: &ConstValue| {
+        if at + 4 > bytes.len() {
+            return;
+        }
+        match v.convert(s) {
+            Some(ConstValue::Float(f)) => put_f32s(bytes, at, &[f as f32]),
+            Some(ConstValue::Int(i)) => put_i32(bytes, at, i as i32),
+            Some(ConstValue::UInt(u)) => put_u32(bytes, at, u as u32),
+            Some(ConstValue::Bool(b)) => put_u32(bytes, at, u32::from(b)),
+            _ => {}
+        }
+    };
+    match (ty, value) {
+        (Type::Scalar(s), v) => scalar(bytes, offset, *s, v),
+        (Type::Vector(s, _), ConstValue::Composite(items)) => {
+            for (i, item) in items.iter().enumerate() {
+                scalar(bytes, offset + 4 * i, *s, item);
+            }
+        }
+        (Type::Matrix(n), ConstValue::Composite(items)) => {
+            let n = usize::from(*n);
+            for (i, item) in items.iter().enumerate() {
+                scalar(bytes, offset + (i / n) * 16 + (i % n) * 4, Scalar::Float, item);
+            }
+        }
+        (Type::Array(element, _), ConstValue::Composite(items)) => {
+            for (i, item) in items.iter().enumerate() {
+                write_const(bytes, offset + i * stride, element, item, stride);
+            }
+        }
+        _ => {}
+    }
 }

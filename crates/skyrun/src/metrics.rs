@@ -18,6 +18,11 @@ pub struct Metrics {
     pub p999_rel: f64,
     /// 99th percentile of the relative error.
     pub p99_rel: f64,
+    /// Peak signal-to-noise ratio in dB over the finite channels, with the reference's largest
+    /// |value| as the peak: 10·log10(peak² / mean((a − b)²)); ∞ for identical images. For HDR
+    /// skies the peak is the sun, so PSNR weighs errors in bright pixels; the relative errors
+    /// above are the measure that treats dark and bright sky alike.
+    pub psnr_db: f64,
     /// RGB channels that are NaN in either image.
     pub nan: usize,
     /// RGB channels that are ±∞ in either image (and NaN in neither).
@@ -30,8 +35,8 @@ impl fmt::Display for Metrics {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "{} px: max {:.3e}, p99.9 {:.3e}, p99 {:.3e}, mean {:.3e}, NaN {}, Inf {}",
-            self.pixels, self.max_rel, self.p999_rel, self.p99_rel, self.mean_rel, self.nan, self.inf
+            "{} px: max {:.3e}, p99.9 {:.3e}, p99 {:.3e}, mean {:.3e}, PSNR {:.1} dB, NaN {}, Inf {}",
+            self.pixels, self.max_rel, self.p999_rel, self.p99_rel, self.mean_rel, self.psnr_db, self.nan, self.inf
         )
     }
 }
@@ -89,6 +94,7 @@ pub fn compare(a: &[[f32; 4]], b: &[[f32; 4]], floor: f32) -> Metrics {
     assert_eq!(a.len(), b.len(), "images of different sizes");
     let mut m = Metrics { pixels: a.len(), ..Metrics::default() };
     let mut rels = Vec::with_capacity(a.len() * 3);
+    let (mut peak, mut squared_error) = (0.0f64, 0.0f64);
     for (pa, pb) in a.iter().zip(b) {
         for c in 0..3 {
             let (x, y) = (pa[c], pb[c]);
@@ -98,12 +104,16 @@ pub fn compare(a: &[[f32; 4]], b: &[[f32; 4]], floor: f32) -> Metrics {
                 m.inf += 1;
             } else {
                 rels.push(rel(x, y, floor));
+                peak = peak.max(f64::from(y).abs());
+                squared_error += (f64::from(x) - f64::from(y)).powi(2);
             }
         }
     }
     if rels.is_empty() {
         return m;
     }
+    let mse = squared_error / rels.len() as f64;
+    m.psnr_db = if mse == 0.0 { f64::INFINITY } else { 10.0 * (peak * peak / mse).log10() };
     rels.sort_by(f64::total_cmp);
     let rank = |q: f64| {
         let i = (q * rels.len() as f64).ceil() as usize;
@@ -156,6 +166,16 @@ mod tests {
         assert_eq!(m.max_rel, 0.0);
         assert_eq!(m.pixels, 10);
         assert_eq!((m.nan, m.inf), (0, 0));
+        assert_eq!(m.psnr_db, f64::INFINITY);
+    }
+
+    #[test]
+    fn psnr_uses_the_reference_peak() {
+        // Peak 2, one channel of six off by 0.02: MSE = 0.0004 / 6, PSNR = 10·log10(4·6 / 0.0004).
+        let a = [[2.0, 1.0, 1.0, 0.0], [1.02, 1.0, 1.0, 0.0]];
+        let b = [[2.0, 1.0, 1.0, 0.0], [1.0, 1.0, 1.0, 0.0]];
+        let m = compare(&a, &b, 1e-4);
+        assert!((m.psnr_db - 10.0 * (24.0f64 / 0.0004).log10()).abs() < 1e-3, "{}", m.psnr_db);
     }
 
     #[test]

@@ -122,3 +122,45 @@ fn material_values_are_type_checked() {
     let err = material_bytes(&lowered, &[("no_such", UniformValue::Int(1))]).unwrap_err();
     assert_eq!(err, MaterialError::NoSuchUniform("no_such".into()));
 }
+
+#[test]
+fn shader_defaults_equal_skyrefs_hand_written_defaults() {
+    // skyref's `FreemanParams::default()` was written by hand from the shader text; the
+    // material built from the checker's constant-folded defaults must be the same bytes.
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/freeman_sky.gdshader");
+    let front = gdshader::check_file(&path).expect("fixture readable");
+    let shader = front.shader.as_ref().expect("checks");
+    let lowered = gdsky_naga::lower(&front).expect("lowers");
+    let from_shader = material_with_defaults(shader, &lowered, &[]).expect("defaults");
+    assert_eq!(from_shader, freeman_material(&lowered, &skyref::FreemanParams::default()));
+
+    let set = |name: &str, value: &str| vec![(name.to_string(), value.to_string())];
+    let sixteen = material_with_defaults(shader, &lowered, &set("view_samples", "16")).expect("override");
+    let at = lowered.uniforms["view_samples"].offset as usize;
+    assert_eq!(i32::from_le_bytes(sixteen[at..at + 4].try_into().unwrap()), 16);
+    let ground = material_with_defaults(shader, &lowered, &set("ground_color", "0.5, 0.25, 1")).expect("override");
+    let at = lowered.uniforms["ground_color"].offset as usize;
+    let read = |i: usize| f32::from_le_bytes(ground[at + 4 * i..at + 4 * i + 4].try_into().unwrap());
+    assert_eq!([read(0), read(1), read(2)], [0.5, 0.25, 1.0]);
+
+    assert!(matches!(
+        material_with_defaults(shader, &lowered, &set("no_such", "1")),
+        Err(MaterialError::NoSuchUniform(_))
+    ));
+    assert!(matches!(
+        material_with_defaults(shader, &lowered, &set("view_samples", "1.5")),
+        Err(MaterialError::BadValue { .. })
+    ));
+}
+
+#[test]
+fn cube_face_bases_agree_between_wrapper_and_reference() {
+    for face in 0..6u8 {
+        let wrapper = gdsky_naga::wrapper::cube_face_basis(usize::from(face));
+        let reference = skyref::cube_face_basis(face);
+        for (c, column) in wrapper.iter().enumerate() {
+            let r = reference.col(c);
+            assert_eq!(*column, [r.x as f32, r.y as f32, r.z as f32], "face {face} column {c}");
+        }
+    }
+}

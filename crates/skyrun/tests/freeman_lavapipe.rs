@@ -80,12 +80,12 @@ fn freeman_on_the_gpu_matches_skyref() {
     let builtins = SkyBuiltins::from_scene(&panorama_scene, WIDTH, HEIGHT);
     let bad_wgsl = render(&gpu, "fn oops(", Projection::Panorama, 4, 4, &builtins, &[]);
     eprintln!("invalid WGSL: {bad_wgsl:?}");
-    if !matches!(bad_wgsl, Err(skyrun::RenderError::Wgpu { .. })) {
+    if !matches!(bad_wgsl, Err(skyrun::RenderError::Binding(skyrun::bindings::BindingError::Parse(_)))) {
         failures.push(format!("invalid WGSL gave {bad_wgsl:?}"));
     }
     let no_material = render(&gpu, &wgsl, Projection::Panorama, 4, 4, &builtins, &[]);
     eprintln!("no material: {no_material:?}");
-    if !matches!(no_material, Err(skyrun::RenderError::Wgpu { .. })) {
+    if !matches!(no_material, Err(skyrun::RenderError::Material { .. })) {
         failures.push(format!("a missing material block gave {no_material:?}"));
     }
 

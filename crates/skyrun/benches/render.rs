@@ -1,0 +1,98 @@
+//! Render time of gdsky's converted Freeman sky against a hand-written WGSL port of the same
+//! shader (`freeman_hand.wgsl`, written for this bench), on the Vulkan adapter (lavapipe where
+//! there is no GPU), side by side in one run.
+//!
+//! Same harness, size, scene, material and sample counts for both; the two render
+//! bit-identical images (`tests/hand_port.rs`). The time measured is the host's wall time from
+//! submitting the command buffer until the device is idle ([`skyrun::Rendered::gpu_wait`]),
+//! after a warm-up render that includes the driver's shader compilation; resource creation and
+//! read-back are outside it.
+//!
+//! `cargo bench -p skyrun --bench render`
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use skyref::{FreemanParams, Projection, Scene};
+use skyrun::{Gpu, SkyBuiltins, SkyShader, SubPasses, freeman_material};
+use std::path::Path;
+use std::time::Duration;
+
+const HAND_PORT: &str = include_str!("freeman_hand.wgsl");
+
+/// The hand port's ozone density `max(0.0, …)`, inside the hottest function
+/// (`get_optical_depth_at_point`, ~240 calls per pixel).
+const OZONE_MAX: &str = "max(0.0, 1.0 - abs(altitude - material.ozone_center)";
+
+/// GLSL's `max` as gdsky emits it: IEEE maxNum (a NaN operand yields the other), which WGSL's
+/// `max` does not promise.
+const MAX_NUM: &str = "
+fn max_num(a: f32, b: f32) -> f32 {
+    let a_nan = (bitcast<u32>(a) & 0x7fffffffu) > 0x7f800000u;
+    let b_nan = (bitcast<u32>(b) & 0x7fffffffu) > 0x7f800000u;
+    return select(select(max(a, b), b, a_nan), a, b_nan);
+}
+";
+
+fn render_time(c: &mut Criterion) {
+    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
+        // SAFETY: set before wgpu or any other thread starts.
+        unsafe { std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir()) };
+    }
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/freeman_sky.gdshader");
+    let front = gdshader::check_file(&path).expect("fixture readable");
+    let lowered = gdsky_naga::lower(&front).expect("the Freeman sky lowers");
+    let converted = gdsky_naga::to_wgsl(&lowered).expect("WGSL");
+    let material = freeman_material(&lowered, &FreemanParams::default());
+    let gpu = Gpu::new().unwrap_or_else(|e| panic!("the render bench needs a Vulkan adapter: {e}"));
+    eprintln!("adapter: {}", gpu.adapter_info());
+
+    let (width, height) = (256, 128);
+    let scene = Scene { sun_azimuth_deg: 30.0, position: glam::DVec3::new(0.0, 1.0, 0.0), ..Scene::default() };
+    let builtins = SkyBuiltins::from_scene(&scene, width, height);
+    // The hand port with only gdsky's maxNum emulation put back in the hot loop: if it runs as
+    // fast as the converted shader, that emulation explains the difference.
+    assert!(HAND_PORT.contains(OZONE_MAX), "the hand port's ozone line changed");
+    let hand_max_num = HAND_PORT.replace(OZONE_MAX, &OZONE_MAX.replacen("max(", "max_num(", 1)) + MAX_NUM;
+    let variants =
+        [("gdsky_converted", converted.as_str()), ("hand_written", HAND_PORT), ("hand_written_max_num", &hand_max_num)];
+    let shaders: Vec<(&str, SkyShader)> = variants
+        .into_iter()
+        .map(|(name, wgsl)| (name, SkyShader::new(&gpu, wgsl, SubPasses::default()).expect("compiles")))
+        .collect();
+    let render = |shader: &SkyShader| {
+        shader.render(&gpu, Projection::Panorama, width, height, &builtins, &material).expect("renders").gpu_wait
+    };
+
+    // The machine is shared and noisy: besides criterion's groups (one after the other), time
+    // the two alternately, so drift in the machine's load hits both alike, and print the ratio
+    // of the medians.
+    let mut times: Vec<Vec<Duration>> = vec![Vec::new(); shaders.len()];
+    for round in 0..41 {
+        for (i, (_, shader)) in shaders.iter().enumerate() {
+            let t = render(shader);
+            if round > 0 {
+                times[i].push(t);
+            }
+        }
+    }
+    let median = |v: &mut Vec<Duration>| {
+        v.sort();
+        v[v.len() / 2]
+    };
+    let medians: Vec<Duration> = times.iter_mut().map(median).collect();
+    for ((name, _), m) in shaders.iter().zip(&medians) {
+        eprintln!(
+            "interleaved, 40 rounds: {name:<22} median {m:>9.2?}  ratio to hand_written {:.3}",
+            m.as_secs_f64() / medians[1].as_secs_f64()
+        );
+    }
+
+    let mut group = c.benchmark_group("freeman_render_256x128_panorama");
+    group.sample_size(20).warm_up_time(Duration::from_secs(2)).measurement_time(Duration::from_secs(20));
+    for (name, shader) in &shaders {
+        group.bench_function(*name, |b| b.iter_custom(|iters| (0..iters).map(|_| render(shader)).sum()));
+    }
+    group.finish();
+}
+
+criterion_group!(benches, render_time);
+criterion_main!(benches);

@@ -1,0 +1,81 @@
+//! `gdsky compare A.exr B.exr [--max-rel X] [--floor F] [--heatmap OUT.png]`
+
+use clap::Args;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Args)]
+pub struct CompareArgs {
+    /// The image under test.
+    #[arg(value_name = "A.exr")]
+    a: PathBuf,
+    /// The reference: relative errors are taken against it.
+    #[arg(value_name = "B.exr")]
+    b: PathBuf,
+    /// Fail (exit 1) when the largest relative error is above X, or any channel is NaN or
+    /// infinite. Without it, compare only reports.
+    #[arg(long, value_name = "X")]
+    max_rel: Option<f64>,
+    /// Relative error per RGB channel is |a − b| / max(|b|, F): F keeps near-black pixels from
+    /// dominating.
+    #[arg(long, value_name = "F", default_value_t = 1e-4)]
+    floor: f32,
+    /// Write a heatmap of the per-pixel relative error (log scale 1e-7 … 1; NaN/Inf magenta).
+    #[arg(long, value_name = "OUT.png")]
+    heatmap: Option<PathBuf>,
+}
+
+pub fn run(args: &CompareArgs) -> ExitCode {
+    if !(args.floor.is_finite() && args.floor > 0.0) {
+        eprintln!("error: --floor {} must be a positive number", args.floor);
+        return ExitCode::from(1);
+    }
+    let read = |path: &PathBuf| {
+        skyrun::read_exr(path).map_err(|err| {
+            eprintln!("error: {err}");
+            ExitCode::from(2)
+        })
+    };
+    let (a, b) = match (read(&args.a), read(&args.b)) {
+        (Ok(a), Ok(b)) => (a, b),
+        (Err(code), _) | (_, Err(code)) => return code,
+    };
+    if (a.width, a.height) != (b.width, b.height) {
+        eprintln!(
+            "error: {} is {}x{} but {} is {}x{}",
+            args.a.display(),
+            a.width,
+            a.height,
+            args.b.display(),
+            b.width,
+            b.height
+        );
+        return ExitCode::from(1);
+    }
+    let m = skyrun::compare(&a.pixels, &b.pixels, args.floor);
+    println!(
+        "max_rel={:.6e} mean_rel={:.6e} p999_rel={:.6e} nan={} inf={} pixels={}",
+        m.max_rel, m.mean_rel, m.p999_rel, m.nan, m.inf, m.pixels
+    );
+    eprintln!("p99_rel={:.6e} psnr={:.2} dB", m.p99_rel, m.psnr_db);
+    for p in skyrun::worst_pixels(&a.pixels, &b.pixels, args.floor, a.width as usize, 3) {
+        eprintln!("  worst {p}");
+    }
+    if let Some(path) = &args.heatmap {
+        if let Err(err) = skyrun::write_heatmap_png(path, &a, &b, args.floor) {
+            eprintln!("error: {err}");
+            return ExitCode::from(2);
+        }
+        eprintln!("wrote {}", path.display());
+    }
+    match args.max_rel {
+        Some(bound) if m.max_rel > bound || m.nan + m.inf > 0 => {
+            eprintln!(
+                "FAIL: max_rel {:.3e} > {bound:e} or non-finite channels ({} NaN, {} Inf)",
+                m.max_rel, m.nan, m.inf
+            );
+            ExitCode::from(1)
+        }
+        _ => ExitCode::SUCCESS,
+    }
+}

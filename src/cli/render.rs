@@ -1,0 +1,132 @@
+//! `gdsky render [FILE] -o OUT.exr …` and `gdsky reference -o OUT.exr … [--precision f32|f64]`.
+
+use super::scene::{LoadedShader, SceneArgs, load_shader, open_gpu, strip, write_outputs};
+use clap::{Args, ValueEnum};
+use skyrun::{SkyBuiltins, SkyShader, SubPasses, material_with_defaults};
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Instant;
+
+#[derive(Args)]
+pub struct RenderArgs {
+    /// The sky shader to render; without one, the bundled Freeman sky.
+    #[arg(value_name = "FILE")]
+    file: Option<PathBuf>,
+    /// The EXR to write: RGBA 32-bit float, scanline, row 0 at the top (replaced atomically).
+    #[arg(short = 'o', long = "out", value_name = "OUT.exr")]
+    out: PathBuf,
+    /// Also write an 8-bit PNG preview, tone mapped 1 − exp(−L·0.5) and gamma 2.2.
+    #[arg(long, value_name = "OUT.png")]
+    png: Option<PathBuf>,
+    #[command(flatten)]
+    scene: SceneArgs,
+}
+
+pub fn run(args: &RenderArgs) -> ExitCode {
+    match render(args) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(code) => code,
+    }
+}
+
+fn render(args: &RenderArgs) -> Result<(), ExitCode> {
+    let (views, width, height) = args.scene.views().map_err(usage)?;
+    let overrides = args.scene.overrides().map_err(usage)?;
+    let started = Instant::now();
+    let LoadedShader { front, lowered, wgsl } = load_shader(args.file.as_deref())?;
+    let convert_time = started.elapsed();
+    let shader_info = front.shader.as_ref().ok_or(ExitCode::from(1))?;
+    let material = material_with_defaults(shader_info, &lowered, &overrides).map_err(usage)?;
+    let gpu = open_gpu()?;
+    let shader = SkyShader::new(&gpu, &wgsl, SubPasses::of(&front)).map_err(|err| {
+        eprintln!("error: {err}");
+        ExitCode::from(1)
+    })?;
+    let mut builtins = SkyBuiltins::from_scene(&args.scene.scene(), width, height);
+    builtins.time = args.scene.time;
+    let mut rendered = Vec::with_capacity(views.len());
+    let mut gpu_time = std::time::Duration::ZERO;
+    for view in views {
+        let r = shader.render(&gpu, view, width, height, &builtins, &material).map_err(|err| {
+            eprintln!("error: {err}");
+            ExitCode::from(1)
+        })?;
+        gpu_time += r.gpu_wait;
+        rendered.push(r.pixels);
+    }
+    let image = strip(rendered, width, height).map_err(|err| {
+        eprintln!("error: {err}");
+        ExitCode::from(1)
+    })?;
+    eprintln!("convert {convert_time:.2?}, GPU {gpu_time:.2?}, total {:.2?}", started.elapsed());
+    write_outputs(&image, &args.out, args.png.as_ref())
+}
+
+/// Working precision of the CPU reference.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Precision {
+    /// The same f32 arithmetic a GPU does (the pixel tests' reference).
+    F32,
+    /// The same quadrature in f64: the shader's own f32 error removed.
+    F64,
+}
+
+#[derive(Args)]
+pub struct ReferenceArgs {
+    /// The EXR to write: RGBA 32-bit float, scanline, row 0 at the top (replaced atomically).
+    #[arg(short = 'o', long = "out", value_name = "OUT.exr")]
+    out: PathBuf,
+    /// Also write an 8-bit PNG preview, tone mapped as `render`'s.
+    #[arg(long, value_name = "OUT.png")]
+    png: Option<PathBuf>,
+    /// Working precision.
+    #[arg(long, value_enum, default_value_t = Precision::F32)]
+    precision: Precision,
+    #[command(flatten)]
+    scene: SceneArgs,
+}
+
+pub fn run_reference(args: &ReferenceArgs) -> ExitCode {
+    match reference(args) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(code) => code,
+    }
+}
+
+fn reference(args: &ReferenceArgs) -> Result<(), ExitCode> {
+    let (views, width, height) = args.scene.views().map_err(usage)?;
+    let params = freeman_params(&args.scene.overrides().map_err(usage)?).map_err(usage)?;
+    let scene = args.scene.scene();
+    let started = Instant::now();
+    let rendered: Vec<Vec<[f32; 4]>> = views
+        .into_iter()
+        .map(|view| match args.precision {
+            Precision::F32 => skyref::f32::render(&params, &scene, view, width, height),
+            Precision::F64 => skyref::f64::render(&params, &scene, view, width, height)
+                .into_iter()
+                .map(|p| p.map(|c| c as f32))
+                .collect(),
+        })
+        .collect();
+    eprintln!("skyref {:?}: {:.2?}", args.precision, started.elapsed());
+    let image = strip(rendered, width, height).map_err(|err| {
+        eprintln!("error: {err}");
+        ExitCode::from(1)
+    })?;
+    write_outputs(&image, &args.out, args.png.as_ref())
+}
+
+/// The Freeman sky's parameters with `--set` overrides applied (by the shader's uniform names).
+pub fn freeman_params(overrides: &[(String, String)]) -> Result<skyref::FreemanParams, String> {
+    let mut params = skyref::FreemanParams::default();
+    for (name, text) in overrides {
+        params.set(name, text)?;
+    }
+    Ok(params)
+}
+
+/// Prints a usage problem and gives exit code 1 (the input is wrong).
+fn usage(message: impl std::fmt::Display) -> ExitCode {
+    eprintln!("error: {message}");
+    ExitCode::from(1)
+}
