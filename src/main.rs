@@ -55,6 +55,16 @@ enum Command {
     /// WGSL/SPIR-V/JSON, EXRs, PNG previews, heatmaps and demo.png. Exit status: 0 pass, 1 the
     /// comparison failed, 2 no Vulkan adapter or an output cannot be written.
     Demo(cli::demo::DemoArgs),
+    /// Render a sky shader in real Godot 4.6 (its Web export, headless) and write the recovered
+    /// linear radiance as an EXR.
+    ///
+    /// Godot's Compatibility renderer stores 8 bits; the oracle renders at 27 background energies
+    /// (2^-12 … 2^14) and inverts Godot's measured transfer curve, recovering COLOR to ~0.1 %
+    /// median, ~0.6 % worst. Camera projection only; TIME cannot be set. Needs `bash
+    /// scripts/install-oracle.sh` (chromium, node, the Godot export). Exit status: 0 written, 1
+    /// the shader, a flag or Godot's compilation failed, 2 the oracle is not installed or a file
+    /// cannot be read or written.
+    Oracle(cli::oracle::OracleArgs),
 }
 
 fn main() -> ExitCode {
@@ -75,5 +85,6 @@ fn main() -> ExitCode {
         Command::Reference(args) => cli::render::run_reference(&args),
         Command::Compare(args) => cli::compare::run(&args),
         Command::Demo(args) => cli::demo::run(&args),
+        Command::Oracle(args) => cli::oracle::run(&args),
     }
 }

@@ -8,7 +8,7 @@ use super::scene::{BUNDLED_NAME, LoadedShader, load_shader, open_gpu};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use skyref::{FreemanParams, Projection, Scene};
-use skyrun::{Image, SkyBuiltins, SkyShader, SubPasses, freeman_material};
+use skyrun::{Image, SkyBuiltins, freeman_material};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
@@ -75,14 +75,15 @@ fn demo(out: &Path) -> Result<(), ExitCode> {
 
     progress.set_message("converting the bundled Freeman sky");
     let t = Instant::now();
-    let LoadedShader { front, lowered, wgsl } = load_shader(None)?;
-    let spirv = gdsky_naga::to_spirv(&lowered).map_err(|err| {
+    let loaded = load_shader(None)?;
+    let LoadedShader { front, lowered, wgsl } = &loaded;
+    let spirv = gdsky_naga::to_spirv(lowered).map_err(|err| {
         eprintln!("error[{}]: naga's SPIR-V writer failed: {err}", gdsky_naga::BACKEND);
         ExitCode::from(1)
     })?;
     let convert_time = t.elapsed();
     let shader_info = front.shader.as_ref().ok_or(ExitCode::from(1))?;
-    let reflection = gdsky_naga::reflect::reflection("freeman_sky", shader_info, &lowered, &Default::default());
+    let reflection = gdsky_naga::reflect::reflection("freeman_sky", shader_info, lowered, &Default::default());
     let json = serde_json::to_string_pretty(&reflection).unwrap_or_default() + "\n";
     let spirv_bytes: Vec<u8> = spirv.iter().flat_map(|w| w.to_le_bytes()).collect();
     for (ext, bytes) in [("wgsl", wgsl.as_bytes()), ("spv", spirv_bytes.as_slice()), ("json", json.as_bytes())] {
@@ -94,14 +95,11 @@ fn demo(out: &Path) -> Result<(), ExitCode> {
     progress.set_message("opening the Vulkan adapter");
     let gpu = progress.suspend(open_gpu)?;
     let adapter = gpu.adapter_info();
-    let shader = SkyShader::new(&gpu, &wgsl, SubPasses::of(&front)).map_err(|err| {
-        eprintln!("error: {err}");
-        ExitCode::from(1)
-    })?;
+    let shader = loaded.compile(&gpu)?;
     progress.inc(1);
 
     let params = FreemanParams::default();
-    let material = freeman_material(&lowered, &params);
+    let material = freeman_material(lowered, &params);
     let mut report = Vec::new();
     let mut previews = Vec::new();
     let mut pass = true;

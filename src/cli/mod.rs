@@ -4,6 +4,7 @@ pub mod check;
 pub mod compare;
 pub mod convert;
 pub mod demo;
+pub mod oracle;
 pub mod render;
 pub mod scene;
 

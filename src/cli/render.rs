@@ -1,8 +1,8 @@
 //! `gdsky render [FILE] -o OUT.exr …` and `gdsky reference -o OUT.exr … [--precision f32|f64]`.
 
-use super::scene::{LoadedShader, SceneArgs, load_shader, open_gpu, strip, write_outputs};
+use super::scene::{SceneArgs, load_shader, open_gpu, strip, write_outputs};
 use clap::{Args, ValueEnum};
-use skyrun::{SkyBuiltins, SkyShader, SubPasses, material_with_defaults};
+use skyrun::{SkyBuiltins, material_with_defaults};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
@@ -33,15 +33,12 @@ fn render(args: &RenderArgs) -> Result<(), ExitCode> {
     let (views, width, height) = args.scene.views().map_err(usage)?;
     let overrides = args.scene.overrides().map_err(usage)?;
     let started = Instant::now();
-    let LoadedShader { front, lowered, wgsl } = load_shader(args.file.as_deref())?;
+    let loaded = load_shader(args.file.as_deref())?;
     let convert_time = started.elapsed();
-    let shader_info = front.shader.as_ref().ok_or(ExitCode::from(1))?;
-    let material = material_with_defaults(shader_info, &lowered, &overrides).map_err(usage)?;
+    let shader_info = loaded.front.shader.as_ref().ok_or(ExitCode::from(1))?;
+    let material = material_with_defaults(shader_info, &loaded.lowered, &overrides).map_err(usage)?;
     let gpu = open_gpu()?;
-    let shader = SkyShader::new(&gpu, &wgsl, SubPasses::of(&front)).map_err(|err| {
-        eprintln!("error: {err}");
-        ExitCode::from(1)
-    })?;
+    let shader = loaded.compile(&gpu)?;
     let mut builtins = SkyBuiltins::from_scene(&args.scene.scene(), width, height);
     builtins.time = args.scene.time;
     let mut rendered = Vec::with_capacity(views.len());

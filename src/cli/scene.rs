@@ -31,9 +31,10 @@ pub enum ProjectionArg {
 /// The scene: image size, projection, sun and camera.
 #[derive(Args, Clone, Debug)]
 pub struct SceneArgs {
-    /// How pixels map to view directions.
-    #[arg(long, value_enum, default_value_t = ProjectionArg::Panorama)]
-    pub projection: ProjectionArg,
+    /// How pixels map to view directions [default: panorama; `oracle`: camera, the only one it
+    /// has].
+    #[arg(long, value_enum)]
+    pub projection: Option<ProjectionArg>,
     /// Image size WxH in pixels (a cubemap: the size of one face, which must be square).
     #[arg(long, value_name = "WxH", default_value = "256x128", value_parser = parse_size)]
     pub size: (u32, u32),
@@ -92,7 +93,7 @@ impl SceneArgs {
     /// The views to render: one projection, or the six cube faces; and the size of each.
     pub fn views(&self) -> Result<(Vec<Projection>, u32, u32), String> {
         let (w, h) = self.size;
-        match self.projection {
+        match self.projection.unwrap_or(ProjectionArg::Panorama) {
             ProjectionArg::Panorama => Ok((vec![Projection::Panorama], w, h)),
             ProjectionArg::Camera => {
                 if !(self.fov > 0.0 && self.fov < 180.0) {
@@ -143,6 +144,21 @@ pub struct LoadedShader {
     pub lowered: gdsky_naga::Lowered,
     /// Its WGSL.
     pub wgsl: String,
+}
+
+impl LoadedShader {
+    /// The shader compiled on `gpu`, with Godot's sub-passes and default textures. Exit 1 when
+    /// the harness cannot bind it.
+    pub fn compile(&self, gpu: &skyrun::Gpu) -> Result<skyrun::SkyShader, ExitCode> {
+        let defaults =
+            self.front.shader.as_ref().map(|s| skyrun::texture_defaults(s, &self.lowered)).unwrap_or_default();
+        skyrun::SkyShader::new(gpu, &self.wgsl, skyrun::SubPasses::of(&self.front))
+            .map(|shader| shader.with_texture_defaults(defaults))
+            .map_err(|err| {
+                eprintln!("error: {err}");
+                ExitCode::from(1)
+            })
+    }
 }
 
 /// Checks and lowers `file`, or the bundled Freeman sky when there is none. Diagnostics are

@@ -116,6 +116,7 @@ pub use imageio::{
 };
 pub use material::{
     MaterialError, UniformValue, freeman_material, freeman_values, material_bytes, material_with_defaults,
+    texture_defaults,
 };
 pub use metrics::{Metrics, PixelDiff, compare, worst_pixels};
 pub use render::{RenderError, Rendered, SkyShader, SubPasses, fragment_entry, render, sub_pass_size};

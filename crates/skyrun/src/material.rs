@@ -220,3 +220,38 @@ fn write_const(
         _ => {}
     }
 }
+
+/// The texel Godot binds for a material sampler the scene gives no texture, from the uniform's
+/// hint: `hint_default_black` (0, 0, 0, 1), `hint_default_transparent` (0, 0, 0, 0),
+/// `hint_normal` (0.5, 0.5, 1, 1), otherwise (`hint_default_white` or no hint) white. Keyed by
+/// the texture's (group, binding); a sampler array gives each element its uniform's default.
+pub fn texture_defaults(shader: &gdshader::CheckedShader, lowered: &Lowered) -> Vec<((u32, u32), [f32; 4])> {
+    let mut defaults: Vec<((u32, u32), [f32; 4])> = lowered
+        .textures
+        .iter()
+        .filter(|(_, slot)| slot.group == MATERIAL_GROUP)
+        .map(|(name, slot)| {
+            // Sampler arrays are lowered as `name_0`, `name_1`, …
+            let uniform = shader.uniforms.iter().find(|u| {
+                u.name == *name
+                    || name
+                        .strip_prefix(u.name.as_str())
+                        .and_then(|rest| rest.strip_prefix('_'))
+                        .is_some_and(|index| index.parse::<u32>().is_ok() && matches!(u.ty, Type::Array(..)))
+            });
+            let has = |hint: &str| uniform.is_some_and(|u| u.hints.iter().any(|h| h.name == hint));
+            let texel = if has("hint_default_black") {
+                [0.0, 0.0, 0.0, 1.0]
+            } else if has("hint_default_transparent") {
+                [0.0; 4]
+            } else if has("hint_normal") {
+                [0.5, 0.5, 1.0, 1.0]
+            } else {
+                [1.0; 4]
+            };
+            ((slot.group, slot.binding), texel)
+        })
+        .collect();
+    defaults.sort_by_key(|(key, _)| *key);
+    defaults
+}

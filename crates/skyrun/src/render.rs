@@ -154,6 +154,7 @@ pub struct SkyShader {
     sub_passes: SubPasses,
     repeat_sampler: wgpu::Sampler,
     clamp_sampler: wgpu::Sampler,
+    texture_defaults: Vec<((u32, u32), [f32; 4])>,
 }
 
 impl SkyShader {
@@ -204,8 +205,18 @@ impl SkyShader {
                 sub_passes,
                 repeat_sampler: sampler(wgpu::AddressMode::Repeat),
                 clamp_sampler: sampler(wgpu::AddressMode::ClampToEdge),
+                texture_defaults: Vec::new(),
             }
         })
+    }
+
+    /// The texels to bind for material textures the scene does not provide, by (group,
+    /// binding), as [`crate::texture_defaults`] reads them from the shader's hints; textures not
+    /// listed are white.
+    #[must_use]
+    pub fn with_texture_defaults(mut self, defaults: Vec<((u32, u32), [f32; 4])>) -> Self {
+        self.texture_defaults = defaults;
+        self
     }
 
     /// The resources the shader declares.
@@ -449,12 +460,17 @@ impl SkyShader {
                         Some(view) => Resource::View(view.clone()),
                         // RADIANCE is black (no radiance map is rendered), and so are the
                         // sub-pass textures in the cubemap pass (Godot's cubemap-family
-                        // default); every other texture the scene does not provide is white,
-                        // as Godot's default texture.
+                        // default); a sub-pass texture not rendered is white; a material
+                        // texture gets its hint's default (white without one), as in Godot.
                         None => {
                             let cube = builtins.render_pass == RenderPass::Cubemap;
                             let black = sky && (binding == 0 || cube);
-                            let value = if black { [0.0, 0.0, 0.0, 1.0] } else { [1.0; 4] };
+                            let hinted = self.texture_defaults.iter().find(|(key, _)| *key == (b.group, binding));
+                            let value = match hinted {
+                                _ if black => [0.0, 0.0, 0.0, 1.0],
+                                Some((_, texel)) => *texel,
+                                None => [1.0; 4],
+                            };
                             Resource::View(bindings::constant_texture(gpu, dimension, sample_type, value))
                         }
                     },

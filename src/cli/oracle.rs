@@ -1,0 +1,186 @@
+//! `gdsky oracle FILE [scene flags] -o godot.exr`: the shader rendered by real Godot 4.6.
+//!
+//! Godot's Web export runs in headless Chromium (crates/skyoracle); its 8-bit frames, rendered
+//! at bracketed background energies, are inverted into the shader's linear COLOR, so
+//! `gdsky compare` can hold `gdsky render` against Godot itself.
+
+use super::scene::{BUNDLED_FREEMAN, ProjectionArg, SceneArgs, write_outputs};
+use clap::Args;
+use gdsky::frontend::check::consteval::ConstValue;
+use gdsky::frontend::check::types::{Scalar, Type};
+use skyoracle::{Camera, Job, Oracle, StartError, Sun, UniformValue};
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Instant;
+
+#[derive(Args)]
+pub struct OracleArgs {
+    /// The sky shader to render in Godot; without one, the bundled Freeman sky. `#include` is not
+    /// available in the oracle (Godot's Web export has no project files to include).
+    #[arg(value_name = "FILE")]
+    file: Option<PathBuf>,
+    /// The EXR to write: the recovered linear COLOR, RGBA 32-bit float (alpha 1), row 0 at the top.
+    #[arg(short = 'o', long = "out", value_name = "OUT.exr")]
+    out: PathBuf,
+    /// Also write an 8-bit PNG preview, tone mapped as `render`'s.
+    #[arg(long, value_name = "OUT.png")]
+    png: Option<PathBuf>,
+    /// Where the oracle is installed: the folder holding `.oracle/` (`bash
+    /// scripts/install-oracle.sh` puts it at the repository root) [default: the source tree this
+    /// binary was built from].
+    #[arg(long, value_name = "DIR")]
+    oracle_root: Option<PathBuf>,
+    #[command(flatten)]
+    scene: SceneArgs,
+}
+
+pub fn run(args: &OracleArgs) -> ExitCode {
+    match oracle(args) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(code) => code,
+    }
+}
+
+fn oracle(args: &OracleArgs) -> Result<(), ExitCode> {
+    let usage = |message: String| {
+        eprintln!("error: {message}");
+        ExitCode::from(1)
+    };
+    if args.scene.projection.is_some_and(|p| p != ProjectionArg::Camera) {
+        return Err(usage("the oracle renders Godot's camera view only: use --projection camera".into()));
+    }
+    let scene = SceneArgs { projection: Some(ProjectionArg::Camera), ..args.scene.clone() };
+    let (_, width, height) = scene.views().map_err(usage)?;
+    let overrides = scene.overrides().map_err(usage)?;
+
+    // gdsky checks the shader first: the uniform types for --set, and a clear diagnostic before
+    // Godot is started for nothing.
+    let loaded = super::scene::load_shader(args.file.as_deref())?;
+    let code = match &args.file {
+        Some(path) => std::fs::read_to_string(path).map_err(|err| {
+            eprintln!("error: cannot read {}: {err}", path.display());
+            ExitCode::from(2)
+        })?,
+        None => BUNDLED_FREEMAN.to_string(),
+    };
+    let checked = loaded.front.shader.as_ref().ok_or(ExitCode::from(1))?;
+    if checked.builtins_used.contains("TIME") && scene.time != 0.0 {
+        eprintln!("warning: the oracle cannot set TIME: Godot's is wall-clock time since it started");
+    }
+    let mut uniforms = Vec::new();
+    for (name, text) in &overrides {
+        let uniform = checked
+            .uniforms
+            .iter()
+            .find(|u| &u.name == name)
+            .ok_or_else(|| usage(format!("the shader has no uniform `{name}`")))?;
+        let value = gdsky_naga::reflect::parse_value(&uniform.ty, text)
+            .map_err(|m| usage(format!("`--set {name}={text}`: {m}")))?;
+        let value = oracle_value(&uniform.ty, &value)
+            .ok_or_else(|| usage(format!("`--set {name}`: the oracle cannot set a `{}` uniform", uniform.type_name)))?;
+        uniforms.push((name.clone(), value));
+    }
+
+    let mut job = Job::new(code, width, height);
+    job.camera = Camera {
+        fov_deg: scene.fov,
+        yaw_deg: scene.yaw,
+        pitch_deg: scene.pitch,
+        position: [scene.position.0, scene.position.1, scene.position.2],
+    };
+    job.sun = (!scene.no_light).then(|| Sun { elevation_deg: scene.sun.0, azimuth_deg: scene.sun.1, ..Sun::default() });
+    job.uniforms = uniforms;
+
+    let root = args.oracle_root.clone().unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")));
+    let started = Instant::now();
+    let mut oracle = start(&root)?;
+    let info = oracle.info();
+    eprintln!(
+        "oracle: Godot {} ({}) on {}, Chromium {}; started in {:.2?}",
+        info.godot_version,
+        info.rendering_method,
+        info.webgl_renderer,
+        info.browser_version,
+        started.elapsed()
+    );
+    let t = Instant::now();
+    let image = oracle.render(&job).map_err(|err| {
+        eprintln!("error: {err}");
+        ExitCode::from(1)
+    })?;
+    let unrecovered = (0..image.height)
+        .flat_map(|y| (0..image.width).map(move |x| (x, y)))
+        .filter(|&(x, y)| image.valid_min(x, y) == 0)
+        .count();
+    eprintln!(
+        "Godot rendered {width}x{height} at {} energies in {:.2?}; {unrecovered} pixel(s) with a channel no bracket \
+         resolved (black, or brighter than the top bracket)",
+        job.brackets.energies().len(),
+        t.elapsed()
+    );
+    let pixels = image.pixels.iter().map(|p| [p[0], p[1], p[2], 1.0]).collect();
+    let out = skyrun::Image::new(width, height, pixels).map_err(|err| {
+        eprintln!("error: {err}");
+        ExitCode::from(1)
+    })?;
+    write_outputs(&out, &args.out, args.png.as_ref())
+}
+
+/// Starts the oracle; a missing part is the environment's fault (exit 2, with what to install).
+fn start(root: &Path) -> Result<Oracle, ExitCode> {
+    Oracle::start(root).map_err(|err| {
+        match err {
+            StartError::Missing(missing) => eprintln!("error: the Godot oracle is not installed: {missing}"),
+            StartError::Failed(failed) => eprintln!("error: the Godot oracle did not start: {failed}"),
+        }
+        ExitCode::from(2)
+    })
+}
+
+/// A checked constant as the oracle sends it, for the types Godot's `set_shader_parameter`
+/// takes from it.
+fn oracle_value(ty: &Type, value: &ConstValue) -> Option<UniformValue> {
+    let float = |v: &ConstValue| match v.convert(Scalar::Float) {
+        Some(ConstValue::Float(f)) => Some(f as f32),
+        _ => None,
+    };
+    let int = |v: &ConstValue| match v.convert(Scalar::Int) {
+        Some(ConstValue::Int(i)) => i32::try_from(i).ok(),
+        _ => None,
+    };
+    let items = |v: &ConstValue| match v {
+        ConstValue::Composite(items) => Some(items.clone()),
+        _ => None,
+    };
+    Some(match ty {
+        Type::Scalar(Scalar::Float) => UniformValue::Float(float(value)?),
+        Type::Scalar(Scalar::Int) => UniformValue::Int(int(value)?),
+        Type::Scalar(Scalar::UInt) => match value.convert(Scalar::UInt) {
+            Some(ConstValue::UInt(u)) => UniformValue::Uint(u32::try_from(u).ok()?),
+            _ => return None,
+        },
+        Type::Scalar(Scalar::Bool) => match value.convert(Scalar::Bool) {
+            Some(ConstValue::Bool(b)) => UniformValue::Bool(b),
+            _ => return None,
+        },
+        Type::Vector(Scalar::Float, n) => {
+            let v = items(value)?.iter().map(float).collect::<Option<Vec<f32>>>()?;
+            match (n, v.as_slice()) {
+                (2, &[x, y]) => UniformValue::Vec2([x, y]),
+                (3, &[x, y, z]) => UniformValue::Vec3([x, y, z]),
+                (4, &[x, y, z, w]) => UniformValue::Vec4([x, y, z, w]),
+                _ => return None,
+            }
+        }
+        Type::Vector(Scalar::Int, n) => {
+            let v = items(value)?.iter().map(int).collect::<Option<Vec<i32>>>()?;
+            match (n, v.as_slice()) {
+                (2, &[x, y]) => UniformValue::IVec2([x, y]),
+                (3, &[x, y, z]) => UniformValue::IVec3([x, y, z]),
+                (4, &[x, y, z, w]) => UniformValue::IVec4([x, y, z, w]),
+                _ => return None,
+            }
+        }
+        _ => return None,
+    })
+}
