@@ -23,6 +23,10 @@ pub struct CompareArgs {
     /// Write a heatmap of the per-pixel relative error (log scale 1e-7 … 1; NaN/Inf magenta).
     #[arg(long, value_name = "OUT.png")]
     heatmap: Option<PathBuf>,
+    /// Write the two images' previews next to each other, A left and B right (tone mapped as
+    /// `render --png`).
+    #[arg(long, value_name = "OUT.png")]
+    side_by_side: Option<PathBuf>,
 }
 
 pub fn run(args: &CompareArgs) -> ExitCode {
@@ -63,6 +67,15 @@ pub fn run(args: &CompareArgs) -> ExitCode {
     }
     if let Some(path) = &args.heatmap {
         if let Err(err) = skyrun::write_heatmap_png(path, &a, &b, args.floor) {
+            eprintln!("error: {err}");
+            return ExitCode::from(2);
+        }
+        eprintln!("wrote {}", path.display());
+    }
+    if let Some(path) = &args.side_by_side {
+        let written =
+            skyrun::write_side_by_side_png(path, &[&a, &b], skyrun::DEFAULT_EXPOSURE, skyrun::DEFAULT_WHITE);
+        if let Err(err) = written {
             eprintln!("error: {err}");
             return ExitCode::from(2);
         }
