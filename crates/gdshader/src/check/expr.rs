@@ -3,6 +3,7 @@
 
 use super::builtins::{self, BuiltinScope};
 use super::consteval::{self, ConstValue};
+use super::reduce::converts_to;
 use super::types::{Scalar, Type};
 use super::{Checker, Global};
 use crate::diag::codes;
@@ -27,8 +28,8 @@ impl ExprInfo {
     }
 }
 
-/// An int or uint literal, possibly signed: the only values Godot converts implicitly, and only
-/// as arguments of built-in functions and constructors.
+/// An int or uint literal, possibly signed (for messages; what Godot converts is decided by
+/// [`converts_to`]).
 fn is_int_literal(e: &Expr) -> bool {
     match &e.kind {
         ExprKind::IntLit(_) | ExprKind::UIntLit(_) => true,
@@ -54,6 +55,23 @@ impl Checker {
     fn set_type(&mut self, e: &Expr, ty: &Type) {
         if let Some(slot) = self.expr_types.get_mut(e.id.0 as usize) {
             *slot = Some(ty.clone());
+        }
+    }
+
+    /// Records the type a constant argument is converted to, when it is a literal: on the
+    /// argument and, through a unary `-` or `+`, on the literal it applies to (so `-3` given to a
+    /// float is a float `3` negated). A converted constructor (`int(2)` in `vec2(1.0, int(2))`)
+    /// keeps its own type: the conversion is then explicit in the lowering.
+    pub(super) fn set_converted(&mut self, e: &Expr, ty: &Type) {
+        match &e.kind {
+            ExprKind::IntLit(_) | ExprKind::UIntLit(_) => self.set_type(e, ty),
+            ExprKind::Unary { op: UnaryOp::Neg | UnaryOp::Plus, operand } if is_int_literal(e) => {
+                self.set_type(e, ty);
+                self.set_converted(operand, ty);
+            }
+            // A constant constructor (`int(2)`): the lowering converts its value to `ty`.
+            ExprKind::Call { .. } => self.set_type(e, ty),
+            _ => {}
         }
     }
 
@@ -145,10 +163,17 @@ impl Checker {
             ExprKind::Unary { op, operand } => self.unary(e, *op, operand),
             ExprKind::IncDec { op, target } => {
                 let info = self.expr(target)?;
-                if !info.ty.is_numeric() {
+                // Godot: int, uint and float scalars and vectors; not matrices ("Invalid base type
+                // for increment/decrement operator.").
+                if !info.ty.is_numeric() || matches!(info.ty, Type::Matrix(_)) {
                     let t = self.type_name(&info.ty);
                     let sym = if op.increment { "++" } else { "--" };
-                    self.error(codes::TYPE_MISMATCH, format!("`{sym}` needs a number, not `{t}`"), target.span, "");
+                    self.error(
+                        codes::TYPE_MISMATCH,
+                        format!("`{sym}` needs an int, uint or float scalar or vector, not `{t}`"),
+                        target.span,
+                        "",
+                    );
                     return None;
                 }
                 self.assignable(target)?;
@@ -350,7 +375,7 @@ impl Checker {
         let result = match op {
             None => v.ty.clone(),
             // No result type falls through to the mismatch report below.
-            Some(op) => self.binary_type(op, &t.ty, &v.ty).unwrap_or(Type::Void),
+            Some(op) => self.binary_type(op, &t.ty, &v.ty, true).unwrap_or(Type::Void),
         };
         if result != t.ty {
             match op {
@@ -373,7 +398,10 @@ impl Checker {
     fn unary(&mut self, e: &Expr, op: UnaryOp, operand: &Expr) -> Option<ExprInfo> {
         let info = self.expr(operand)?;
         let ok = match op {
-            UnaryOp::Neg | UnaryOp::Plus => info.ty.is_numeric(),
+            // Godot negates int, uint and float scalars and vectors, not matrices.
+            UnaryOp::Neg => info.ty.is_numeric() && !matches!(info.ty, Type::Matrix(_)),
+            // Godot's parser drops a unary `+` whatever follows it.
+            UnaryOp::Plus => true,
             UnaryOp::Not => info.ty == Type::BOOL,
             UnaryOp::BitNot => info.ty.is_integer(),
         };
@@ -392,8 +420,11 @@ impl Checker {
         Some(ExprInfo { ty: info.ty, constant: info.constant, value })
     }
 
-    /// The result type of `a op b`, following GLSL ES 3.0 without implicit conversions.
-    fn binary_type(&self, op: BinaryOp, a: &Type, b: &Type) -> Option<Type> {
+    /// The result type of `a op b` (of `a op= b` when `compound`), as Godot's
+    /// `_validate_operator` decides it: GLSL ES 3.0 without implicit conversions, with Godot's
+    /// own restrictions (`%` and shifts take a scalar on the right only; `&`, `|`, `^` mix a
+    /// vector and a scalar only in `&=`, `|=`, `^=`).
+    fn binary_type(&self, op: BinaryOp, a: &Type, b: &Type, compound: bool) -> Option<Type> {
         use BinaryOp::*;
         let same_scalar = a.scalar().is_some() && a.scalar() == b.scalar();
         match op {
@@ -413,32 +444,27 @@ impl Checker {
                     _ => None,
                 }
             }
-            BitAnd | BitOr | BitXor => (a == b && a.is_integer()).then(|| a.clone()),
-            Rem => {
+            // Godot's table lists `ivecN & int`, but for `&`, `|`, `^` it first swaps the operands
+            // so that the scalar comes first, and then finds no entry: only the compound forms
+            // accept a vector and a scalar.
+            BitAnd | BitOr | BitXor if !compound => (a == b && a.is_integer()).then(|| a.clone()),
+            BitAnd | BitOr | BitXor | Rem | Shl | Shr => {
                 if !a.is_integer() || !b.is_integer() || !same_scalar {
                     return None;
                 }
                 match (a, b) {
                     _ if a == b => Some(a.clone()),
-                    (Type::Scalar(_), Type::Vector(..)) => Some(b.clone()),
                     (Type::Vector(..), Type::Scalar(_)) => Some(a.clone()),
-                    _ => None,
-                }
-            }
-            Shl | Shr => {
-                if !a.is_integer() || !b.is_integer() {
-                    return None;
-                }
-                match (a, b) {
-                    (_, Type::Scalar(_)) => Some(a.clone()),
-                    (Type::Vector(_, n), Type::Vector(_, m)) if n == m => Some(a.clone()),
                     _ => None,
                 }
             }
             Less | Greater | LessEq | GreaterEq => {
                 (a == b && matches!(a, Type::Scalar(Scalar::Int | Scalar::UInt | Scalar::Float))).then_some(Type::BOOL)
             }
-            Eq | NotEq => (a == b && !a.is_opaque() && *a != Type::Void).then_some(Type::BOOL),
+            // Godot compares no arrays.
+            Eq | NotEq => {
+                (a == b && !a.is_opaque() && *a != Type::Void && !matches!(a, Type::Array(..))).then_some(Type::BOOL)
+            }
             LogicalAnd | LogicalOr => (*a == Type::BOOL && *b == Type::BOOL).then_some(Type::BOOL),
         }
     }
@@ -447,7 +473,7 @@ impl Checker {
         let a = self.expr(lhs);
         let b = self.expr(rhs);
         let (a, b) = (a?, b?);
-        let Some(ty) = self.binary_type(op, &a.ty, &b.ty) else {
+        let Some(ty) = self.binary_type(op, &a.ty, &b.ty, false) else {
             let (x, y) = (self.type_name(&a.ty), self.type_name(&b.ty));
             let d = self.error(
                 codes::TYPE_MISMATCH,
@@ -673,14 +699,16 @@ impl Checker {
             return None;
         }
         if let Some(overloads) = self.functions.get(&callee.name).cloned() {
-            // Godot converts int literals for a user function too, but only when it has a single
-            // definition (with overloads the literal's own type picks one).
+            // Godot converts scalar constants for a user function too, but only when it has a
+            // single definition (with overloads the constant's own type picks one).
             let convert = overloads.len() == 1;
             let found = overloads.iter().find(|f| {
                 f.params.len() == infos.len()
-                    && f.params.iter().zip(&infos).zip(args).all(|((p, a), arg)| {
-                        p.0 == a.ty || (convert && is_int_literal(arg) && matches!(p.0, Type::Scalar(_)))
-                    })
+                    && f.params
+                        .iter()
+                        .zip(&infos)
+                        .zip(args)
+                        .all(|((p, a), arg)| p.0 == a.ty || (convert && converts_to(arg, &p.0)))
             });
             let Some(f) = found else {
                 let wanted: Vec<String> = overloads
@@ -710,7 +738,7 @@ impl Checker {
             };
             for ((p, q), (a, info)) in f.params.iter().zip(args.iter().zip(&infos)) {
                 if *p != info.ty {
-                    self.set_type(a, p);
+                    self.set_converted(a, p);
                 }
                 if matches!(q, ast::ParamQualifier::Out | ast::ParamQualifier::InOut) {
                     self.assignable(a)?;
@@ -755,13 +783,14 @@ impl Checker {
     ) -> Option<ExprInfo> {
         // Godot tries overloads in table order and accepts the first one that fits after
         // converting int literals, so `abs(-3)` is `abs(float)`: float overloads come first.
-        let fits =
-            |s: &&builtins::Signature| {
-                s.params.len() == infos.len()
-                    && s.params.iter().zip(infos).zip(args).all(|((p, a), arg)| {
-                        p.0 == a.ty || (is_int_literal(arg) && matches!(p.0, Type::Scalar(_)) && !p.1)
-                    })
-            };
+        let fits = |s: &&builtins::Signature| {
+            s.params.len() == infos.len()
+                && s.params
+                    .iter()
+                    .zip(infos)
+                    .zip(args)
+                    .all(|((p, a), arg)| p.0 == a.ty || (!p.1 && converts_to(arg, &p.0)))
+        };
         let Some(sig) = sigs.iter().find(fits) else {
             let given = self.arg_list(infos);
             let mut shown: Vec<String> = Vec::new();
@@ -796,8 +825,8 @@ impl Checker {
         };
         for ((p, a), arg) in sig.params.iter().zip(infos).zip(args) {
             if p.0 != a.ty {
-                // An int literal converted to the parameter type: record the converted type.
-                self.set_type(arg, &p.0);
+                // A constant converted to the parameter type: record the converted type.
+                self.set_converted(arg, &p.0);
             }
             if p.1 {
                 self.assignable(arg)?;
@@ -832,9 +861,10 @@ impl Checker {
         if args.is_empty() {
             return fail(self, "a constructor needs at least one argument".into());
         }
-        // Int literals become the target's scalar type; other arguments keep theirs.
+        // Scalar constants Godot converts become the target's scalar type; other arguments keep
+        // theirs.
         let arg_scalar = |info: &ExprInfo, arg: &Expr| {
-            if is_int_literal(arg) { Some(target) } else { info.ty.scalar() }
+            if converts_to(arg, &Type::Scalar(target)) { Some(target) } else { info.ty.scalar() }
         };
         let single = infos.len() == 1;
         match &ty {
@@ -878,7 +908,7 @@ impl Checker {
                 let column = Type::Vector(Scalar::Float, *n);
                 let ok = single
                     && (matches!(infos[0].ty, Type::Matrix(_) | Type::Scalar(Scalar::Float))
-                        || is_int_literal(&args[0]))
+                        || converts_to(&args[0], &Type::FLOAT))
                     || infos.len() == usize::from(*n) && infos.iter().all(|i| i.ty == column);
                 if !ok {
                     return fail(
@@ -893,8 +923,11 @@ impl Checker {
             _ => return fail(self, format!("`{}` has no constructor", callee.name)),
         }
         for (info, arg) in infos.iter().zip(args) {
-            if is_int_literal(arg) && matches!(info.ty, Type::Scalar(_)) && !matches!(ty, Type::Scalar(_)) {
-                self.set_type(arg, &Type::Scalar(target));
+            if matches!(info.ty, Type::Scalar(s) if s != target)
+                && !matches!(ty, Type::Scalar(_))
+                && converts_to(arg, &Type::Scalar(target))
+            {
+                self.set_converted(arg, &Type::Scalar(target));
             }
         }
         let value = constant.then(|| construct_value(&ty, &infos)).flatten();
@@ -913,13 +946,9 @@ impl Checker {
             })
             .collect();
         let infos: Vec<ExprInfo> = infos.into_iter().collect::<Option<_>>()?;
-        let fits = info.members.len() == infos.len()
-            && info
-                .members
-                .iter()
-                .zip(&infos)
-                .zip(args)
-                .all(|(((_, t), a), arg)| *t == a.ty || (is_int_literal(arg) && matches!(t, Type::Scalar(_))));
+        // Godot converts nothing here: `S(1)` for a float member is "Invalid assignment of 'int'
+        // to 'float'".
+        let fits = info.members.len() == infos.len() && info.members.iter().zip(&infos).all(|((_, t), a)| *t == a.ty);
         if !fits {
             let given = self.arg_list(&infos);
             let wanted = info.members.iter().map(|(_, t)| self.type_name(t)).collect::<Vec<_>>().join(", ");
@@ -933,11 +962,6 @@ impl Checker {
             .notes
             .push(format!("expected ({wanted}), one value per member in order"));
             return None;
-        }
-        for ((_, t), arg) in info.members.iter().zip(args) {
-            if is_int_literal(arg) {
-                self.set_type(arg, t);
-            }
         }
         let constant = infos.iter().all(|i| i.constant);
         Some(ExprInfo { ty: Type::Struct(id), constant, value: None })
@@ -974,17 +998,12 @@ impl Checker {
         let mut constant = true;
         let mut values = Some(Vec::new());
         let mut ok = true;
+        // Godot converts nothing here: `float[2](1, 2)` is "Invalid assignment of 'int' to 'float'".
         for arg in args {
             match self.expr(arg) {
-                Some(i) if i.ty == elem_ty || (is_int_literal(arg) && matches!(elem_ty, Type::Scalar(_))) => {
-                    if i.ty != elem_ty {
-                        self.set_type(arg, &elem_ty);
-                    }
+                Some(i) if i.ty == elem_ty => {
                     constant &= i.constant;
-                    match (
-                        i.value.and_then(|v| if i.ty == elem_ty { Some(v) } else { v.convert(elem_ty.scalar()?) }),
-                        values.as_mut(),
-                    ) {
+                    match (i.value, values.as_mut()) {
                         (Some(v), Some(vs)) => vs.push(v),
                         _ => values = None,
                     }

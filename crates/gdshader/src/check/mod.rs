@@ -3,9 +3,11 @@
 //! It walks the items in order, as Godot does: a name must be declared before it is used, and
 //! functions cannot be prototyped, so a function can call only those defined above it (which is
 //! also why recursion can only be direct). It resolves every name, types every expression,
-//! evaluates constants, and checks what Godot checks: no implicit int→float except int literals
-//! given to built-in functions and constructors, built-in scopes (EYEDIR and friends exist only in
-//! `sky()`) and read-only-ness, hints, `sky()`'s signature, `discard`, recursion.
+//! evaluates constants, and checks what Godot checks: no implicit conversion except of scalar
+//! constants (literals, negated literals, constructors of them: `reduce.rs`) given to built-in
+//! functions, constructors, user functions that are not overloaded and uniform defaults, built-in
+//! scopes (EYEDIR and friends exist only in `sky()`) and read-only-ness, hints, `sky()`'s
+//! signature, `discard`, recursion.
 //!
 //! Every error is collected; an expression whose type could not be worked out is typed `None`,
 //! and nothing is reported about the expressions around it, so one mistake gives one message.
@@ -15,6 +17,7 @@ pub mod builtins;
 pub mod consteval;
 mod expr;
 mod hints;
+mod reduce;
 mod stmt;
 pub mod types;
 
@@ -591,17 +594,8 @@ impl Checker {
                 .diagnostic
                 .notes
                 .push("use `hint_default_white`, `hint_default_black` or `hint_default_transparent` instead".into());
-            } else if let Some(info) = self.initializer(init, &ty) {
-                if !info.constant {
-                    self.error(
-                        codes::NOT_CONSTANT,
-                        "a uniform's default must be a constant expression",
-                        init.span,
-                        "not constant",
-                    );
-                } else {
-                    default = info.value;
-                }
+            } else {
+                default = self.uniform_default(init, &ty);
             }
         }
         let hints = self.hints(u, &ty, default.as_ref());
@@ -623,6 +617,55 @@ impl Checker {
         }
     }
 
+    /// A uniform's default, as Godot takes it: the expression must reduce to a constant node (a
+    /// literal, a negated one, or a constructor of them: see `reduce.rs`), which is then
+    /// converted to the uniform's type by `convert_constant` (so `uniform float f = 1;` is
+    /// accepted, `uniform float f = 1.0 / 2.0;` is not).
+    fn uniform_default(&mut self, init: &ast::Expr, ty: &Type) -> Option<ConstValue> {
+        if matches!(init.kind, ast::ExprKind::InitList(_)) {
+            return self.initializer(init, ty).and(None);
+        }
+        let info = self.expr(init)?;
+        let Some(reduced) = reduce::reduce(init) else {
+            self.error(
+                codes::NOT_CONSTANT,
+                "a uniform's default must be a literal, or a constructor of literals",
+                init.span,
+                "not a literal",
+            )
+            .diagnostic
+            .notes
+            .push(
+                "Godot folds only literals, `-` and constructors here (\"Expected constant expression after '='\"): \
+                 write the value out"
+                    .into(),
+            );
+            return None;
+        };
+        if reduced.ty == *ty {
+            return info.value;
+        }
+        if let (Type::Scalar(from), Type::Scalar(to)) = (&reduced.ty, ty)
+            && let Some(v) = reduce::convert(&reduced.values[0], *from, *to)
+        {
+            self.set_converted(init, ty);
+            return Some(v);
+        }
+        let (f, t) = (self.type_name(&reduced.ty), self.type_name(ty));
+        self.error(
+            codes::TYPE_MISMATCH,
+            format!("Can't convert constant to '{t}'."),
+            init.span,
+            format!("this is `{f}`"),
+        )
+        .diagnostic
+        .notes
+        .push(
+            "a uniform's default converts only int or uint to float, int to uint (not negative) and uint to int".into(),
+        );
+        None
+    }
+
     fn function(&mut self, f: &ast::Function) {
         let ret = self.resolve_type(&f.return_type, None, None);
         let mut params = Vec::new();
@@ -635,7 +678,10 @@ impl Checker {
                 self.error(codes::TYPE_MISMATCH, "a parameter cannot be `void`", p.ty.span, "");
                 continue;
             }
-            if builtins::builtin_var(&p.name.name).is_some() || param_locals.contains_key(&p.name.name) {
+            // Godot: a parameter cannot take the name of any built-in of sky shaders, of another
+            // parameter, of a uniform or of a global constant (a function's or a struct's is fine).
+            let global = matches!(self.globals.get(&p.name.name), Some(Global::Const { .. } | Global::Uniform { .. }));
+            if builtins::builtin_var(&p.name.name).is_some() || param_locals.contains_key(&p.name.name) || global {
                 self.error(codes::REDECLARED, format!("redefinition of `{}`", p.name.name), p.name.span, "");
             }
             self.declarations.insert(p.name.span, (ty.clone(), None));

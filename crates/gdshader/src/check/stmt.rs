@@ -263,13 +263,14 @@ impl Checker {
         if let Some(ty) = &local.ty {
             self.declarations.insert(name.span, (ty.clone(), local.value.clone()));
         }
-        // Godot checks the current block and the globals; an outer block's local may be shadowed.
-        let clash = self
-            .scopes
-            .last()
-            .and_then(|s| s.get(&name.name).map(|l| l.span))
-            .or_else(|| self.global_spans.get(&name.name).copied());
-        if builtins::builtin_var(&name.name).is_some() {
+        // Godot checks the current block, the built-ins of the current function and the globals
+        // (not struct names, which live apart); an outer block's local may be shadowed, and so
+        // may a built-in that exists only in `sky()`, in another function.
+        let clash = self.scopes.last().and_then(|s| s.get(&name.name).map(|l| l.span)).or_else(|| {
+            self.global_spans.get(&name.name).copied().filter(|_| !self.struct_ids.contains_key(&name.name))
+        });
+        let in_sky = self.current.as_ref().is_some_and(|c| c.is_sky);
+        if builtins::builtin_var(&name.name).is_some_and(|b| in_sky || b.scope == builtins::BuiltinScope::Global) {
             self.error(
                 codes::REDECLARED,
                 format!("`{}` is a built-in and cannot be redeclared", name.name),

@@ -134,3 +134,104 @@ fn builtins_used_are_recorded() {
     let used: Vec<&str> = s.builtins_used.iter().copied().collect();
     assert_eq!(used, ["COLOR", "EYEDIR", "LIGHT0_DIRECTION", "TIME"]);
 }
+
+/// The codes of the errors the front end reports for `src` (after `shader_type sky;`).
+fn error_codes(src: &str) -> Vec<&'static str> {
+    let text = format!("shader_type sky;\n{src}");
+    let out = check_source("test.gdshader", text.into_bytes(), None, &mut NoIncludes);
+    out.diagnostics.iter().filter(|d| d.is_error()).map(|d| d.code).collect()
+}
+
+#[test]
+fn negated_literals_converted_for_a_call_are_typed_down_to_the_literal() {
+    // The lowering emits the literal with the recorded type: `-3` given to abs(float) must be a
+    // float 3 negated, not an int.
+    let (s, text) = checked("void sky() { float a = abs(-3); vec3 v = vec3(-1, 2, +3); COLOR = v * a; }");
+    assert_eq!(type_of(&s, &text, "-3", 0), "float");
+    assert_eq!(type_of(&s, &text, "3", 0), "float");
+    assert_eq!(type_of(&s, &text, "-1", 0), "float");
+    assert_eq!(type_of(&s, &text, "1", 0), "float");
+    assert_eq!(type_of(&s, &text, "3", 1), "float");
+}
+
+#[test]
+fn constants_convert_where_godot_converts_them() {
+    // A constructor of constants is a constant node too (Godot: sin(int(1)) is sin(float)).
+    let (s, text) = checked("void sky() { float a = sin(int(1)); vec2 v = vec2(1.0, int(2)); COLOR = vec3(v, a); }");
+    assert_eq!(type_of(&s, &text, "sin(int(1))", 0), "float");
+    // Never to bool, never a negative value to uint, never in a struct or array constructor.
+    assert_eq!(error_codes("void sky() { bvec2 b = bvec2(1, 0); }"), ["E301"]);
+    assert_eq!(error_codes("void sky() { uvec2 u = uvec2(-1); }"), ["E301"]);
+    assert_eq!(error_codes("float f(uint x) { return 1.0; }\nvoid sky() { COLOR = vec3(f(-1)); }"), ["E301"]);
+    assert_eq!(error_codes("struct S { float a; };\nvoid sky() { S s = S(1); }"), ["E301"]);
+    assert_eq!(error_codes("void sky() { float a[2] = float[2](1, 2); }"), ["E300", "E300"]);
+}
+
+#[test]
+fn uniform_defaults_follow_godots_reduce_and_convert() {
+    let (s, _) = checked(
+        "uniform float f : hint_range(0, 10) = 5;\nuniform uint u = 1;\nuniform int i = 1u;\n\
+         uniform float n = -(1);\nuniform vec3 c = vec3(1, -2, 3u);\nglobal uniform float g = 1;\n\
+         void sky() { COLOR = c; }",
+    );
+    let defaults: Vec<_> = s.uniforms.iter().map(|u| u.default_text.clone().unwrap_or_default()).collect();
+    assert_eq!(defaults, ["5.0", "1u", "1", "-1.0", "vec3(1.0, -2.0, 3.0)", "1.0"]);
+    // Only literals, `-` and constructors of them are folded.
+    for bad in [
+        "uniform float f = 1.0 + 1.0;",
+        "const float K = 2.0;\nuniform float f = K;",
+        "uniform vec2 v = vec2(1.0).xy;",
+        "uniform int i = int(1.5);",
+        "uniform bool b = bool(1);",
+    ] {
+        assert_eq!(error_codes(bad), ["E306"], "{bad}");
+    }
+    // And converted only between scalars, int to uint only when not negative.
+    for bad in [
+        "uniform vec3 v = 1;",
+        "uniform uint u = -1;",
+        "uniform int i = 1.0;",
+        "uniform bool b = 1;",
+        "uniform int i = 4294967295u;",
+    ] {
+        assert_eq!(error_codes(bad), ["E300"], "{bad}");
+    }
+}
+
+#[test]
+fn operators_take_the_operands_godot_takes() {
+    let ok = "void sky() { int i = 1 << 2; uint u = 1u >> 1u; ivec2 a = ivec2(1) << 2; \
+              uvec2 b = uvec2(1u) << uvec2(1u); a &= 3; b |= 1u; a %= 2; ivec2 m = ivec2(1) % 2; \
+              bool t = +true; mat2 p = +mat2(1.0); COLOR = vec3(0.0); }";
+    checked(ok);
+    for bad in [
+        "int x = 1 << 2u;",
+        "uint x = 1u << 2;",
+        "ivec2 x = ivec2(1) << 1u;",
+        "ivec3 x = ivec3(1) >> uvec3(2u);",
+        "int x = 1; x <<= 2u;",
+        "ivec2 x = 2 % ivec2(1);",
+        "ivec2 x = ivec2(1) & 3;",
+        "mat2 m = -mat2(1.0);",
+        "mat2 m = mat2(1.0); m++;",
+        "float a[2] = {1.0, 2.0}; bool c = a == a;",
+    ] {
+        assert_eq!(error_codes(&format!("void sky() {{ {bad} }}")), ["E300"], "{bad}");
+    }
+}
+
+#[test]
+fn names_clash_where_godots_do() {
+    // A helper may reuse the name of a built-in that exists only in sky(), and any function may
+    // reuse a struct's name for a local.
+    checked(
+        "void h() { vec3 EYEDIR = vec3(1.0); float ALPHA = EYEDIR.x; }\nstruct S { float a; };\n\
+         void sky() { float S = 1.0; COLOR = vec3(S); }",
+    );
+    // Not in sky(), not a global built-in, and no parameter named like a uniform or a constant.
+    assert_eq!(error_codes("void sky() { vec3 EYEDIR = vec3(1.0); }"), ["E201"]);
+    assert_eq!(error_codes("void h() { float TIME = 1.0; }"), ["E201"]);
+    assert_eq!(error_codes("uniform float u;\nvoid h(float u) { }"), ["E201"]);
+    assert_eq!(error_codes("const float K = 1.0;\nvoid h(float K) { }"), ["E201"]);
+    assert_eq!(error_codes("void h(float ALPHA) { }"), ["E201"]);
+}

@@ -593,9 +593,19 @@ impl<'l, 'a> FnCtx<'l, 'a> {
                     _ => Bo::Modulo,
                 }
             }
-            BinaryOp::BitAnd => Bo::And,
-            BinaryOp::BitOr => Bo::InclusiveOr,
-            BinaryOp::BitXor => Bo::ExclusiveOr,
+            BinaryOp::BitAnd | BinaryOp::BitOr | BinaryOp::BitXor => {
+                // Godot allows `ivec2 &= int` (compound forms); naga wants equal shapes.
+                match (lt, rt) {
+                    (GdType::Vector(..), GdType::Scalar(_)) => r = splat_to(b, r, lt),
+                    (GdType::Scalar(_), GdType::Vector(..)) => l = splat_to(b, l, rt),
+                    _ => {}
+                }
+                match op {
+                    BinaryOp::BitAnd => Bo::And,
+                    BinaryOp::BitOr => Bo::InclusiveOr,
+                    _ => Bo::ExclusiveOr,
+                }
+            }
             BinaryOp::Shl | BinaryOp::Shr => {
                 // naga wants an unsigned shift amount of the left side's shape.
                 if rt.scalar() == Some(GdScalar::Int) {
@@ -613,7 +623,16 @@ impl<'l, 'a> FnCtx<'l, 'a> {
 
     fn call(&mut self, b: &mut FnBuilder, e: &Expr, callee: &ast::Ident, args: &[Expr]) -> Option<Val> {
         if let Some(ty) = GdType::from_name(&callee.name) {
-            return self.constructor(b, e, &ty, args).map(Val::Value);
+            let v = self.constructor(b, e, &ty, args)?;
+            // A constant constructor passed where Godot converts it (`g(int(2))` for
+            // `g(float)`) carries the converted type in the checker's table.
+            return Some(Val::Value(match (self.type_of(e), ty.scalar()) {
+                (Some(recorded), Some(_)) if recorded != ty => match recorded.scalar() {
+                    Some(to) => self.convert(b, v, &ty, to, e.span),
+                    None => v,
+                },
+                _ => v,
+            }));
         }
         if self.lw.shader.structs.iter().any(|s| s.name == callee.name) {
             let ty = self.type_of(e)?;
