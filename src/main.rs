@@ -65,6 +65,29 @@ enum Command {
     /// the shader, a flag or Godot's compilation failed, 2 the oracle is not installed or a file
     /// cannot be read or written.
     Oracle(cli::oracle::OracleArgs),
+    /// Benchmark a Freeman-compatible sky: render time against error over a sweep of sample
+    /// counts.
+    ///
+    /// Sweeps view_samples {4,8,12,16,24,32,48,64} × sun_samples {2,4,8,16} (and any int uniform
+    /// given with --knob), renders each on the adapter (median wall time submit → idle of --runs
+    /// renders after a warm-up) and measures it against skyref's converged f64 image (1024/256
+    /// samples, cached on disk): mean, p99 and max relative error in linear radiance, mean error
+    /// after tone mapping. Writes DIR/bench.csv and DIR/bench.png (log-log, Pareto front
+    /// highlighted) and prints the front. Exit status: 0 written, 1 a flag is invalid or FILE is
+    /// not Freeman-compatible, 2 no Vulkan adapter or an output cannot be written.
+    Bench(cli::bench::BenchArgs),
+    /// Stress-test the numerical stability of a Freeman-compatible sky, in f32 on the adapter and
+    /// on the CPU, against skyref in f64.
+    ///
+    /// Sweeps camera altitude (0.5 m … 100 km and above the atmosphere), sun elevation (−90° …
+    /// 90°, dense near 0°), a panorama and a narrow view of the horizon, and each uniform at the
+    /// ends of its hint_range; reports NaN/Inf counts and the worst relative errors with where they
+    /// occur, for the shader on the GPU (f32) and for skyref's own f32 on the CPU. Writes
+    /// DIR/stress.md, DIR/stress.csv and heatmaps; prints a `summary:` line. --quick runs a small
+    /// subset (for CI). Exit status: 0 report written, 1 a flag is invalid, FILE is not
+    /// Freeman-compatible, or --quick found NaN/Inf at default uniforms, 2 no Vulkan adapter or an
+    /// output cannot be written.
+    Stress(cli::stress::StressArgs),
 }
 
 fn main() -> ExitCode {
@@ -86,5 +109,7 @@ fn main() -> ExitCode {
         Command::Compare(args) => cli::compare::run(&args),
         Command::Demo(args) => cli::demo::run(&args),
         Command::Oracle(args) => cli::oracle::run(&args),
+        Command::Bench(args) => cli::bench::run(&args),
+        Command::Stress(args) => cli::stress::run(&args),
     }
 }

@@ -1,5 +1,6 @@
 //! One module per subcommand, and what they share.
 
+pub mod bench;
 pub mod check;
 pub mod compare;
 pub mod convert;
@@ -7,6 +8,8 @@ pub mod demo;
 pub mod oracle;
 pub mod render;
 pub mod scene;
+pub mod stress;
+pub mod sweep;
 
 use std::io::Write;
 use std::path::Path;

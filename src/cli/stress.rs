@@ -1,0 +1,715 @@
+//! `gdsky stress [FILE] [--quick]`: numerical stability of a Freeman-compatible sky.
+//!
+//! Sweeps camera altitude, sun elevation, two views (a tall panorama, which covers every view
+//! direction, and a 4°-high camera view of the horizon toward the sun's azimuth, which samples
+//! the grazing rays densely) and each uniform at the ends of its `hint_range`, one at a time at
+//! a few representative scenes. Each case is rendered three ways with the same sample counts:
+//! FILE on the adapter in f32, skyref in f32 on the CPU, and skyref in f64 on the CPU, the
+//! truth. GPU f32 against f64 is the shader's error; skyref f32 against f64 is the error of the
+//! original Freeman arithmetic in f32 (whatever FILE is), so the two columns tell a conversion
+//! problem (GPU ≠ skyref f32) from an f32 problem (both far from f64).
+//!
+//! Writes `stress.md` (the report), `stress.csv` (every case), `grid.png` (the worst error per
+//! altitude × sun elevation at default uniforms) and per-pixel heatmaps of the worst cases, and
+//! prints a final machine-readable line:
+//! `summary: nan_at_defaults=… inf_at_defaults=… horizon_worst=… horizon_p999=… …`.
+
+use super::scene::{BUNDLED_NAME, open_gpu};
+use super::sweep::{self, ErrorStats, sci};
+use clap::Args;
+use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+use skyref::{FreemanParams, Projection, Scene};
+use skyrun::{Image, SkyBuiltins};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+/// Camera altitudes in metres: from the shader's 0.5 m clamp to the top of the 100 km
+/// atmosphere, and 150 km, above it (the shader clamps the camera to the atmosphere's top).
+const ALTITUDES: [f64; 9] = [0.5, 1.0, 10.0, 100.0, 1e3, 1e4, 3e4, 1e5, 1.5e5];
+/// Sun elevations in degrees, dense around the horizon where rays graze the planet.
+const SUN_ELEVATIONS: [f64; 17] =
+    [-90.0, -30.0, -10.0, -4.0, -2.0, -1.0, -0.5, 0.0, 0.25, 0.5, 1.0, 2.0, 4.0, 10.0, 30.0, 60.0, 90.0];
+/// `--quick`: still the horizon case (0.5 m, sun 0°), night, twilight, day and above the
+/// atmosphere.
+const QUICK_ALTITUDES: [f64; 3] = [0.5, 1e3, 1.5e5];
+const QUICK_SUN_ELEVATIONS: [f64; 5] = [-90.0, -2.0, 0.0, 10.0, 90.0];
+/// Scenes (altitude m, sun °) where each uniform is set to the ends of its hint_range: the
+/// horizon case, an ordinary day, and twilight seen from the stratosphere.
+const UNIFORM_SCENES: [(f64, f64); 3] = [(0.5, 0.0), (1.0, 10.0), (3e4, -4.0)];
+const QUICK_UNIFORM_SCENES: [(f64, f64); 2] = [(0.5, 0.0), (1.0, 10.0)];
+/// `--quick` sets only these uniforms, at the low end of their range (0: the exponent's
+/// divisor, the NaN the issue reports).
+const QUICK_UNIFORMS: [&str; 2] = ["rayleigh_scale_height", "mie_scale_height"];
+/// The horizon case of the summary.
+const HORIZON: (f64, f64) = (0.5, 0.0);
+/// Vertical field of view of the horizon view, degrees (±2° around the horizon).
+const HORIZON_FOV: f64 = 4.0;
+/// Per-pixel heatmaps written for the worst cases at default uniforms.
+const HEATMAPS: usize = 4;
+
+#[derive(Args)]
+pub struct StressArgs {
+    /// The sky shader to test (Freeman-compatible: the Freeman sky's uniforms, e.g.
+    /// shaders/freeman_stable.gdshader); without one, the bundled Freeman sky.
+    #[arg(value_name = "FILE")]
+    file: Option<PathBuf>,
+    /// A small sweep for CI: 3 altitudes × 5 sun elevations (with the horizon case), the
+    /// scale heights at 0, small images.
+    #[arg(long)]
+    quick: bool,
+    /// Folder for stress.md, stress.csv, grid.png and the heatmaps (created if missing).
+    #[arg(short = 'o', long = "out-dir", value_name = "DIR", default_value = "out/stress")]
+    out_dir: PathBuf,
+}
+
+/// Which view a case renders.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum View {
+    /// The whole sphere of directions, rows dense enough to resolve the horizon.
+    Panorama,
+    /// A narrow camera view across the horizon toward the sun's azimuth.
+    Horizon,
+}
+
+impl View {
+    fn name(self) -> &'static str {
+        match self {
+            View::Panorama => "panorama",
+            View::Horizon => "horizon",
+        }
+    }
+}
+
+/// One case of the sweep.
+#[derive(Clone, Debug)]
+struct Case {
+    altitude: f64,
+    sun: f64,
+    view: View,
+    /// A uniform set to one end of its hint_range (name, value as text); `None` at defaults.
+    uniform: Option<(String, String)>,
+}
+
+impl Case {
+    fn scene(&self) -> Scene {
+        Scene {
+            sun_elevation_deg: self.sun,
+            sun_azimuth_deg: 0.0,
+            light_enabled: true,
+            position: glam::DVec3::new(0.0, self.altitude, 0.0),
+            fov_deg: if self.view == View::Horizon { HORIZON_FOV } else { 90.0 },
+            yaw_deg: 0.0,
+            pitch_deg: 0.0,
+        }
+    }
+
+    fn projection(&self) -> Projection {
+        match self.view {
+            View::Panorama => Projection::Panorama,
+            View::Horizon => Projection::Camera,
+        }
+    }
+
+    fn params(&self) -> Result<FreemanParams, String> {
+        let mut params = FreemanParams::default();
+        if let Some((name, value)) = &self.uniform {
+            params.set(name, value)?;
+        }
+        Ok(params)
+    }
+
+    fn label(&self) -> String {
+        let uniform = self.uniform.as_ref().map(|(n, v)| format!(", {n}={v}")).unwrap_or_default();
+        format!("{}, sun {}°, {}{uniform}", altitude_text(self.altitude), self.sun, self.view.name())
+    }
+
+    fn slug(&self) -> String {
+        let uniform = self.uniform.as_ref().map(|(n, v)| format!("-{n}={v}")).unwrap_or_default();
+        format!("{}m-sun{}-{}{uniform}", self.altitude, self.sun, self.view.name())
+    }
+}
+
+fn altitude_text(m: f64) -> String {
+    if m >= 1e3 { format!("{} km", m / 1e3) } else { format!("{m} m") }
+}
+
+/// A case's measurements.
+struct Outcome {
+    case: Case,
+    gpu: ErrorStats,
+    cpu: ErrorStats,
+    /// Where the GPU's worst channel is: (x, y, channel, EYEDIR elevation in degrees).
+    gpu_where: Option<(u32, u32, usize, f64)>,
+    cpu_where: Option<(u32, u32, usize, f64)>,
+}
+
+/// The images of one case.
+struct Rendered {
+    gpu: Vec<[f32; 4]>,
+    cpu32: Vec<[f32; 4]>,
+    cpu64: Vec<[f64; 4]>,
+}
+
+pub fn run(args: &StressArgs) -> ExitCode {
+    match stress(args) {
+        Ok(code) => code,
+        Err(code) => code,
+    }
+}
+
+fn usage(message: impl std::fmt::Display) -> ExitCode {
+    eprintln!("error: {message}");
+    ExitCode::from(1)
+}
+
+fn environment(message: impl std::fmt::Display) -> ExitCode {
+    eprintln!("error: {message}");
+    ExitCode::from(2)
+}
+
+/// The hint_range ends of FILE's uniforms, as text (`rayleigh_scale_height`, `0.0`, `100000.0`).
+fn hint_ranges(shader: &gdsky::frontend::CheckedShader) -> Vec<(String, String, String)> {
+    shader
+        .uniforms
+        .iter()
+        .filter_map(|u| {
+            let hint = u.hints.iter().find(|h| h.name == "hint_range")?;
+            match hint.args.as_slice() {
+                [lo, hi, ..] => Some((u.name.clone(), lo.clone(), hi.clone())),
+                _ => None,
+            }
+        })
+        .collect()
+}
+
+fn cases(quick: bool, ranges: &[(String, String, String)]) -> Vec<Case> {
+    let (altitudes, suns, scenes): (&[f64], &[f64], &[(f64, f64)]) = if quick {
+        (&QUICK_ALTITUDES, &QUICK_SUN_ELEVATIONS, &QUICK_UNIFORM_SCENES)
+    } else {
+        (&ALTITUDES, &SUN_ELEVATIONS, &UNIFORM_SCENES)
+    };
+    let mut cases = Vec::new();
+    for &altitude in altitudes {
+        for &sun in suns {
+            for view in [View::Panorama, View::Horizon] {
+                cases.push(Case { altitude, sun, view, uniform: None });
+            }
+        }
+    }
+    for (name, lo, hi) in ranges {
+        let ends: Vec<&String> = if quick {
+            if !QUICK_UNIFORMS.contains(&name.as_str()) {
+                continue;
+            }
+            vec![lo]
+        } else {
+            vec![lo, hi]
+        };
+        for value in ends {
+            for &(altitude, sun) in scenes {
+                cases.push(Case { altitude, sun, view: View::Panorama, uniform: Some((name.clone(), value.clone())) });
+            }
+        }
+    }
+    cases
+}
+
+fn stress(args: &StressArgs) -> Result<ExitCode, ExitCode> {
+    let loaded = sweep::load_freeman(args.file.as_deref())?;
+    let shader_info = loaded.front.shader.as_ref().ok_or(ExitCode::from(1))?;
+    let name = args.file.as_ref().map(|f| f.display().to_string()).unwrap_or(BUNDLED_NAME.into());
+    let ranges = hint_ranges(shader_info);
+    let cases = cases(args.quick, &ranges);
+    for case in &cases {
+        case.params().map_err(|e| usage(format!("{name}: hint_range end not usable: {e}")))?;
+    }
+    std::fs::create_dir_all(&args.out_dir)
+        .map_err(|e| environment(format!("cannot create {}: {e}", args.out_dir.display())))?;
+    let gpu = open_gpu()?;
+    let adapter = gpu.adapter_info();
+    let shader = loaded.compile(&gpu)?;
+    let (pano, horizon) = if args.quick { ((32, 64), (64, 16)) } else { ((128, 256), (256, 64)) };
+    let size = |view: View| if view == View::Panorama { pano } else { horizon };
+
+    let render = |case: &Case| -> Result<Rendered, ExitCode> {
+        let params = case.params().map_err(usage)?;
+        let material = sweep::material(&loaded, &params).map_err(usage)?;
+        let (w, h) = size(case.view);
+        let scene = case.scene();
+        let builtins = SkyBuiltins::from_scene(&scene, w, h);
+        let gpu_image = shader.render(&gpu, case.projection(), w, h, &builtins, &material).map_err(usage)?;
+        Ok(Rendered {
+            gpu: gpu_image.pixels,
+            cpu32: skyref::f32::render(&params, &scene, case.projection(), w, h),
+            cpu64: skyref::f64::render(&params, &scene, case.projection(), w, h),
+        })
+    };
+    let locate = |case: &Case, worst: Option<(usize, usize)>| {
+        worst.map(|(i, channel)| {
+            let (w, h) = size(case.view);
+            let (x, y) = ((i % w as usize) as u32, (i / w as usize) as u32);
+            let d = skyref::f64::eyedir(&case.scene(), case.projection(), x, y, w, h);
+            (x, y, channel, d.y.clamp(-1.0, 1.0).asin().to_degrees())
+        })
+    };
+
+    let bar = sweep::progress_bar(cases.len() as u64);
+    let started = std::time::Instant::now();
+    let mut outcomes = Vec::with_capacity(cases.len());
+    for case in &cases {
+        bar.set_message(case.label());
+        let images = bar.suspend(|| render(case))?;
+        let gpu_stats = sweep::error_stats(&images.gpu, &images.cpu64);
+        let cpu_stats = sweep::error_stats(&images.cpu32, &images.cpu64);
+        outcomes.push(Outcome {
+            case: case.clone(),
+            gpu_where: locate(case, gpu_stats.worst),
+            cpu_where: locate(case, cpu_stats.worst),
+            gpu: gpu_stats,
+            cpu: cpu_stats,
+        });
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    let elapsed = started.elapsed();
+
+    let summary = Summary::of(&outcomes);
+    // Heatmaps: the horizon case's views (GPU and CPU), then the worst cases at defaults.
+    let mut heatmaps = Vec::new();
+    let mut worst_defaults: Vec<&Outcome> = outcomes.iter().filter(|o| o.case.uniform.is_none()).collect();
+    worst_defaults.sort_by(|a, b| badness(&b.gpu).total_cmp(&badness(&a.gpu)));
+    let horizon_cases: Vec<&Outcome> = outcomes.iter().filter(|o| is_horizon(&o.case)).collect();
+    for (i, o) in horizon_cases.iter().chain(worst_defaults.iter().take(HEATMAPS)).enumerate() {
+        let images = render(&o.case)?;
+        let (w, h) = size(o.case.view);
+        let image = |pixels: Vec<[f32; 4]>| Image::new(w, h, pixels).map_err(environment);
+        let truth = image(sweep::narrow(&images.cpu64))?;
+        let mut targets = vec![("gpu", images.gpu)];
+        if i < horizon_cases.len() {
+            targets.push(("cpu", images.cpu32));
+        }
+        for (what, pixels) in targets {
+            let file = format!("heatmap-{what}-{}.png", o.case.slug());
+            let path = args.out_dir.join(&file);
+            skyrun::write_heatmap_png(&path, &image(pixels)?, &truth, sweep::FLOOR as f32).map_err(environment)?;
+            if !heatmaps.iter().any(|(f, _)| f == &file) {
+                heatmaps.push((file, format!("{} — {}", what.to_uppercase(), o.case.label())));
+            }
+        }
+    }
+    let grid_path = args.out_dir.join("grid.png");
+    let (altitudes, suns): (&[f64], &[f64]) =
+        if args.quick { (&QUICK_ALTITUDES, &QUICK_SUN_ELEVATIONS) } else { (&ALTITUDES, &SUN_ELEVATIONS) };
+    plot_grid(&grid_path, &name, &outcomes, altitudes, suns).map_err(environment)?;
+
+    let context = Context {
+        name: &name,
+        adapter: adapter.to_string(),
+        quick: args.quick,
+        pano,
+        horizon,
+        elapsed,
+        altitudes,
+        suns,
+        heatmaps: &heatmaps,
+    };
+    let report = report_markdown(&context, &outcomes, &summary);
+    let md_path = args.out_dir.join("stress.md");
+    super::write_atomically(&md_path, report.as_bytes())
+        .map_err(|e| environment(format!("cannot write {}: {e}", md_path.display())))?;
+    let csv_path = args.out_dir.join("stress.csv");
+    super::write_atomically(&csv_path, csv_text(&outcomes).as_bytes())
+        .map_err(|e| environment(format!("cannot write {}: {e}", csv_path.display())))?;
+
+    println!("gdsky stress: {name}, {} cases ({}), {:.1?}", outcomes.len(), mode(args.quick), elapsed);
+    println!("adapter  {adapter}");
+    print!("{}", summary.table());
+    println!(
+        "wrote    {}, {}, {} and {} heatmaps",
+        md_path.display(),
+        csv_path.display(),
+        grid_path.display(),
+        heatmaps.len()
+    );
+    println!("{}", summary.line(outcomes.len()));
+    if args.quick && summary.gpu_nan + summary.gpu_inf > 0 {
+        eprintln!("error: NaN/Inf at default uniforms ({} NaN, {} Inf channels)", summary.gpu_nan, summary.gpu_inf);
+        return Ok(ExitCode::from(1));
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn mode(quick: bool) -> &'static str {
+    if quick { "--quick" } else { "full" }
+}
+
+fn is_horizon(case: &Case) -> bool {
+    case.uniform.is_none() && (case.altitude, case.sun) == HORIZON
+}
+
+/// How bad a case is, for ranking: any non-finite value first, then the largest error.
+fn badness(s: &ErrorStats) -> f64 {
+    if s.nan + s.inf > 0 { f64::INFINITY } else { s.max }
+}
+
+/// What the summary line and table report.
+#[derive(Default)]
+struct Summary {
+    gpu_nan: usize,
+    gpu_inf: usize,
+    cpu_nan: usize,
+    cpu_inf: usize,
+    default_cases: usize,
+    gpu_horizon_worst: f64,
+    gpu_horizon_p999: f64,
+    cpu_horizon_worst: f64,
+    cpu_horizon_p999: f64,
+    gpu_worst_default: Option<(f64, String)>,
+    cpu_worst_default: Option<(f64, String)>,
+}
+
+impl Summary {
+    fn of(outcomes: &[Outcome]) -> Summary {
+        let mut s = Summary::default();
+        for o in outcomes.iter().filter(|o| o.case.uniform.is_none()) {
+            s.default_cases += 1;
+            s.gpu_nan += o.gpu.nan;
+            s.gpu_inf += o.gpu.inf;
+            s.cpu_nan += o.cpu.nan;
+            s.cpu_inf += o.cpu.inf;
+            if is_horizon(&o.case) {
+                s.gpu_horizon_worst = s.gpu_horizon_worst.max(o.gpu.max);
+                s.gpu_horizon_p999 = s.gpu_horizon_p999.max(o.gpu.p999);
+                s.cpu_horizon_worst = s.cpu_horizon_worst.max(o.cpu.max);
+                s.cpu_horizon_p999 = s.cpu_horizon_p999.max(o.cpu.p999);
+            }
+            for (slot, stats) in [(&mut s.gpu_worst_default, &o.gpu), (&mut s.cpu_worst_default, &o.cpu)] {
+                if slot.as_ref().is_none_or(|(v, _)| stats.max > *v) {
+                    *slot = Some((stats.max, o.case.label()));
+                }
+            }
+        }
+        s
+    }
+
+    /// The machine-readable last line (tests and CI parse it).
+    fn line(&self, cases: usize) -> String {
+        format!(
+            "summary: nan_at_defaults={} inf_at_defaults={} horizon_worst={:.6e} horizon_p999={:.6e} \
+             cpu_nan_at_defaults={} cpu_inf_at_defaults={} cpu_horizon_worst={:.6e} cpu_horizon_p999={:.6e} cases={cases}",
+            self.gpu_nan,
+            self.gpu_inf,
+            self.gpu_horizon_worst,
+            self.gpu_horizon_p999,
+            self.cpu_nan,
+            self.cpu_inf,
+            self.cpu_horizon_worst,
+            self.cpu_horizon_p999
+        )
+    }
+
+    fn table(&self) -> String {
+        let worst = |w: &Option<(f64, String)>| {
+            w.as_ref().map(|(v, at)| format!("{v:.2e} ({at})")).unwrap_or_else(|| "—".into())
+        };
+        let mut out = String::new();
+        let _ = writeln!(
+            out,
+            "| | the shader on the GPU (f32) vs skyref f64 | skyref f32 (original arithmetic, CPU) vs f64 |"
+        );
+        let _ = writeln!(out, "| --- | --- | --- |");
+        let _ = writeln!(
+            out,
+            "| NaN / Inf channels at default uniforms ({} cases) | {} / {} | {} / {} |",
+            self.default_cases, self.gpu_nan, self.gpu_inf, self.cpu_nan, self.cpu_inf
+        );
+        let _ = writeln!(
+            out,
+            "| horizon case (0.5 m, sun 0°): worst relative error | {:.2e} | {:.2e} |",
+            self.gpu_horizon_worst, self.cpu_horizon_worst
+        );
+        let _ = writeln!(
+            out,
+            "| horizon case: p99.9 relative error | {:.2e} | {:.2e} |",
+            self.gpu_horizon_p999, self.cpu_horizon_p999
+        );
+        let _ = writeln!(
+            out,
+            "| worst case at default uniforms | {} | {} |",
+            worst(&self.gpu_worst_default),
+            worst(&self.cpu_worst_default)
+        );
+        out
+    }
+}
+
+/// What the report says about the run.
+struct Context<'a> {
+    name: &'a str,
+    adapter: String,
+    quick: bool,
+    pano: (u32, u32),
+    horizon: (u32, u32),
+    elapsed: std::time::Duration,
+    altitudes: &'a [f64],
+    suns: &'a [f64],
+    heatmaps: &'a [(String, String)],
+}
+
+fn where_text(w: Option<(u32, u32, usize, f64)>) -> String {
+    match w {
+        Some((x, y, c, elevation)) => format!("({x}, {y}) {} at {elevation:+.2}°", ["R", "G", "B"][c]),
+        None => "—".into(),
+    }
+}
+
+fn stats_cells(s: &ErrorStats, w: Option<(u32, u32, usize, f64)>) -> String {
+    let measured = s.channels > 0;
+    format!("{} / {} | {} | {} | {}", s.nan, s.inf, sci(s.max, measured), sci(s.p999, measured), where_text(w))
+}
+
+fn report_markdown(ctx: &Context, outcomes: &[Outcome], summary: &Summary) -> String {
+    let mut md = String::new();
+    let _ = writeln!(md, "# gdsky stress: {}\n", ctx.name);
+    let _ = writeln!(
+        md,
+        "Adapter: {}. Mode: {} ({} cases, {:.1?}). Panorama {}×{} (rows {:.2}° apart); horizon view {}×{}, \
+         camera {HORIZON_FOV}° high toward the sun's azimuth, pitch 0 (rows {:.3}° apart). Relative error per RGB \
+         channel |x − f64| / max(|f64|, {:e}); the f64 truth is skyref with the same sample counts as the shader. \
+         NaN / Inf count channels of the image under test; `where` is the worst channel's pixel (x, y), channel and \
+         EYEDIR elevation.\n",
+        ctx.adapter,
+        mode(ctx.quick),
+        outcomes.len(),
+        ctx.elapsed,
+        ctx.pano.0,
+        ctx.pano.1,
+        180.0 / f64::from(ctx.pano.1),
+        ctx.horizon.0,
+        ctx.horizon.1,
+        HORIZON_FOV / f64::from(ctx.horizon.1),
+        sweep::FLOOR
+    );
+    let _ = writeln!(md, "## Summary\n\n{}", summary.table());
+    let _ = writeln!(md, "`{}`\n", summary.line(outcomes.len()));
+
+    for (title, pick) in [("GPU f32 vs skyref f64", true), ("skyref f32 (the original arithmetic, CPU) vs f64", false)]
+    {
+        let _ = writeln!(
+            md,
+            "## {title}: worst relative error at default uniforms, altitude × sun elevation (both views)\n"
+        );
+        let mut head = String::from("| altitude |");
+        let mut rule = String::from("| --- |");
+        for sun in ctx.suns {
+            let _ = write!(head, " {sun}° |");
+            rule.push_str(" --- |");
+        }
+        let _ = writeln!(md, "{head}\n{rule}");
+        for &altitude in ctx.altitudes {
+            let mut row = format!("| {} |", altitude_text(altitude));
+            for &sun in ctx.suns {
+                let cell: Vec<&ErrorStats> = outcomes
+                    .iter()
+                    .filter(|o| o.case.uniform.is_none() && o.case.altitude == altitude && o.case.sun == sun)
+                    .map(|o| if pick { &o.gpu } else { &o.cpu })
+                    .collect();
+                let nonfinite: usize = cell.iter().map(|s| s.nan + s.inf).sum();
+                let max = cell.iter().map(|s| s.max).fold(0.0, f64::max);
+                if nonfinite > 0 {
+                    let _ = write!(row, " **{nonfinite} NaN/Inf** |");
+                } else {
+                    let _ = write!(row, " {max:.1e} |");
+                }
+            }
+            let _ = writeln!(md, "{row}");
+        }
+        md.push('\n');
+    }
+    let _ = writeln!(md, "![worst relative error per altitude and sun elevation](grid.png)\n");
+
+    let _ = writeln!(md, "## The 15 worst cases at default uniforms (by GPU error)\n");
+    let _ = writeln!(
+        md,
+        "| case | GPU NaN / Inf | GPU max | GPU p99.9 | GPU where | CPU NaN / Inf | CPU max | CPU p99.9 | CPU where |"
+    );
+    let _ = writeln!(md, "| --- | --- | --- | --- | --- | --- | --- | --- | --- |");
+    let mut ranked: Vec<&Outcome> = outcomes.iter().filter(|o| o.case.uniform.is_none()).collect();
+    ranked.sort_by(|a, b| badness(&b.gpu).total_cmp(&badness(&a.gpu)));
+    for o in ranked.iter().take(15) {
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} |",
+            o.case.label(),
+            stats_cells(&o.gpu, o.gpu_where),
+            stats_cells(&o.cpu, o.cpu_where)
+        );
+    }
+    md.push('\n');
+
+    let _ = writeln!(md, "## Uniforms at the ends of their hint_range (panorama)\n");
+    let _ = writeln!(
+        md,
+        "| uniform | scene | GPU NaN / Inf | GPU max | GPU p99.9 | GPU where | CPU NaN / Inf | CPU max | CPU p99.9 | \
+         CPU where | f64 non-finite |"
+    );
+    let _ = writeln!(md, "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
+    for o in outcomes.iter().filter(|o| o.case.uniform.is_some()) {
+        let (n, v) = o.case.uniform.clone().unwrap_or_default();
+        let _ = writeln!(
+            md,
+            "| {n}={v} | {}, sun {}° | {} | {} | {} |",
+            altitude_text(o.case.altitude),
+            o.case.sun,
+            stats_cells(&o.gpu, o.gpu_where),
+            stats_cells(&o.cpu, o.cpu_where),
+            o.gpu.truth_nonfinite
+        );
+    }
+    md.push('\n');
+    let _ = writeln!(md, "## Heatmaps (per-pixel relative error against f64, log scale 1e-7 … 1; NaN/Inf magenta)\n");
+    for (file, caption) in ctx.heatmaps {
+        let _ = writeln!(md, "- {caption}: ![{caption}]({file})");
+    }
+    md
+}
+
+/// Every case, one row: altitude_m, sun_deg, view, uniform, value, then for gpu and cpu: nan,
+/// inf, max_rel, p999_rel, p99_rel, mean_rel, worst_x, worst_y, worst_channel,
+/// worst_elevation_deg; and truth_nonfinite.
+fn csv_text(outcomes: &[Outcome]) -> String {
+    let mut out = String::from("altitude_m,sun_deg,view,uniform,value");
+    for side in ["gpu", "cpu"] {
+        for col in [
+            "nan",
+            "inf",
+            "max_rel",
+            "p999_rel",
+            "p99_rel",
+            "mean_rel",
+            "worst_x",
+            "worst_y",
+            "worst_channel",
+            "worst_elevation_deg",
+        ] {
+            let _ = write!(out, ",{side}_{col}");
+        }
+    }
+    out.push_str(",truth_nonfinite\n");
+    for o in outcomes {
+        let (n, v) = o.case.uniform.clone().unwrap_or_default();
+        let _ = write!(out, "{},{},{},{n},{v}", o.case.altitude, o.case.sun, o.case.view.name());
+        for (s, w) in [(&o.gpu, o.gpu_where), (&o.cpu, o.cpu_where)] {
+            let _ = write!(out, ",{},{},{:.6e},{:.6e},{:.6e},{:.6e}", s.nan, s.inf, s.max, s.p999, s.p99, s.mean);
+            match w {
+                Some((x, y, c, e)) => {
+                    let _ = write!(out, ",{x},{y},{c},{e:.4}");
+                }
+                None => out.push_str(",,,,"),
+            }
+        }
+        let _ = writeln!(out, ",{}", o.gpu.truth_nonfinite);
+    }
+    out
+}
+
+/// Viridis-like colour for t in [0, 1] (a few stops, linearly interpolated).
+fn colour(t: f64) -> RGBColor {
+    const STOPS: [(u8, u8, u8); 5] = [(68, 1, 84), (59, 82, 139), (33, 145, 140), (94, 201, 98), (253, 231, 37)];
+    let t = t.clamp(0.0, 1.0) * (STOPS.len() - 1) as f64;
+    let i = (t.floor() as usize).min(STOPS.len() - 2);
+    let f = t - i as f64;
+    let mix = |a: u8, b: u8| (f64::from(a) + (f64::from(b) - f64::from(a)) * f).round() as u8;
+    let (a, b) = (STOPS[i], STOPS[i + 1]);
+    RGBColor(mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
+}
+
+/// grid.png: two panels (GPU f32 and CPU f32, each against f64), cells altitude × sun
+/// elevation at default uniforms, coloured by log10 of the worst relative error over both views
+/// (1e-7 dark … 1 bright) and labelled with it; magenta where a value is NaN or ±∞.
+fn plot_grid(path: &Path, name: &str, outcomes: &[Outcome], altitudes: &[f64], suns: &[f64]) -> Result<(), String> {
+    sweep::register_fonts();
+    let (w, h) = (1600u32, 600u32);
+    let mut rgb = vec![255u8; (w * h * 3) as usize];
+    let err = |e: &dyn std::fmt::Display| format!("cannot draw {}: {e}", path.display());
+    let index = |v: &SegmentValue<i32>| match v {
+        SegmentValue::Exact(i) | SegmentValue::CenterOf(i) => Some(*i as usize),
+        SegmentValue::Last => None,
+    };
+    {
+        let root = BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| err(&e))?;
+        let title = format!(
+            "{name}: worst relative error vs f64 at default uniforms, both views (colour log10 1e-7 … 1; magenta NaN/Inf)"
+        );
+        let root = root.titled(&title, ("sans-serif", 18)).map_err(|e| err(&e))?;
+        let panels = root.split_evenly((1, 2));
+        for (panel, (title, gpu)) in panels
+            .iter()
+            .zip([("GPU f32 (the shader)", true), ("skyref f32 on the CPU (the original Freeman arithmetic)", false)])
+        {
+            let (nx, ny) = (suns.len() as i32, altitudes.len() as i32);
+            let mut chart = ChartBuilder::on(panel)
+                .caption(title, ("sans-serif", 16))
+                .margin(10)
+                .x_label_area_size(40)
+                .y_label_area_size(64)
+                // A segmented range a..b has a segment for each of a..=b: one per value.
+                .build_cartesian_2d((0..nx - 1).into_segmented(), (0..ny - 1).into_segmented())
+                .map_err(|e| err(&e))?;
+            let sun_label =
+                |v: &SegmentValue<i32>| index(v).and_then(|i| suns.get(i)).map(|s| format!("{s}")).unwrap_or_default();
+            let alt_label = |v: &SegmentValue<i32>| {
+                index(v).and_then(|i| altitudes.get(i)).map(|a| altitude_text(*a)).unwrap_or_default()
+            };
+            chart
+                .configure_mesh()
+                .disable_mesh()
+                .x_labels(suns.len())
+                .y_labels(altitudes.len())
+                .x_label_formatter(&sun_label)
+                .y_label_formatter(&alt_label)
+                .x_desc("sun elevation, °")
+                .label_style(("sans-serif", 12))
+                .draw()
+                .map_err(|e| err(&e))?;
+            let mut cells = Vec::new();
+            let mut labels = Vec::new();
+            for (iy, &altitude) in altitudes.iter().enumerate() {
+                for (ix, &sun) in suns.iter().enumerate() {
+                    let stats: Vec<&ErrorStats> = outcomes
+                        .iter()
+                        .filter(|o| o.case.uniform.is_none() && o.case.altitude == altitude && o.case.sun == sun)
+                        .map(|o| if gpu { &o.gpu } else { &o.cpu })
+                        .collect();
+                    if stats.is_empty() {
+                        continue;
+                    }
+                    let nonfinite = stats.iter().any(|s| s.nan + s.inf > 0);
+                    let max = stats.iter().map(|s| s.max).fold(0.0, f64::max);
+                    let t = (max.max(1e-7).log10() + 7.0) / 7.0;
+                    let fill = if nonfinite { RGBColor(255, 0, 255) } else { colour(t) };
+                    let (x, y) = (ix as i32, iy as i32);
+                    let corners = [
+                        (SegmentValue::Exact(x), SegmentValue::Exact(y)),
+                        (SegmentValue::Exact(x + 1), SegmentValue::Exact(y + 1)),
+                    ];
+                    cells.push(Rectangle::new(corners, fill.filled()));
+                    let text = if nonfinite { "NaN".to_string() } else { format!("{max:.0e}") };
+                    let ink = if t > 0.6 && !nonfinite { BLACK } else { WHITE };
+                    labels.push(Text::new(
+                        text,
+                        (SegmentValue::CenterOf(x), SegmentValue::CenterOf(y)),
+                        ("sans-serif", 11).into_font().color(&ink).pos(Pos::new(HPos::Center, VPos::Center)),
+                    ));
+                }
+            }
+            chart.draw_series(cells).map_err(|e| err(&e))?;
+            chart.draw_series(labels).map_err(|e| err(&e))?;
+        }
+        root.present().map_err(|e| err(&e))?;
+    }
+    sweep::write_rgb_png(path, w, h, &rgb)
+}
