@@ -42,6 +42,12 @@ fn render_time(c: &mut Criterion) {
     let lowered = gdsky_naga::lower(&front).expect("the Freeman sky lowers");
     let converted = gdsky_naga::to_wgsl(&lowered).expect("WGSL");
     let material = freeman_material(&lowered, &FreemanParams::default());
+    // The f32-stable rewrite (issue #5): same uniforms, so the same material bytes.
+    let stable_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shaders/freeman_stable.gdshader");
+    let stable_front = gdshader::check_file(&stable_path).expect("shaders/freeman_stable.gdshader readable");
+    let stable_lowered = gdsky_naga::lower(&stable_front).expect("the stable sky lowers");
+    let stable = gdsky_naga::to_wgsl(&stable_lowered).expect("WGSL");
+    assert_eq!(freeman_material(&stable_lowered, &FreemanParams::default()), material, "same material layout");
     let gpu = Gpu::new().unwrap_or_else(|e| panic!("the render bench needs a Vulkan adapter: {e}"));
     eprintln!("adapter: {}", gpu.adapter_info());
 
@@ -52,8 +58,12 @@ fn render_time(c: &mut Criterion) {
     // fast as the converted shader, that emulation explains the difference.
     assert!(HAND_PORT.contains(OZONE_MAX), "the hand port's ozone line changed");
     let hand_max_num = HAND_PORT.replace(OZONE_MAX, &OZONE_MAX.replacen("max(", "max_num(", 1)) + MAX_NUM;
-    let variants =
-        [("gdsky_converted", converted.as_str()), ("hand_written", HAND_PORT), ("hand_written_max_num", &hand_max_num)];
+    let variants = [
+        ("gdsky_converted", converted.as_str()),
+        ("hand_written", HAND_PORT),
+        ("hand_written_max_num", &hand_max_num),
+        ("freeman_stable_converted", &stable),
+    ];
     let shaders: Vec<(&str, SkyShader)> = variants
         .into_iter()
         .map(|(name, wgsl)| (name, SkyShader::new(&gpu, wgsl, SubPasses::default()).expect("compiles")))
