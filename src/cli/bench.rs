@@ -6,10 +6,11 @@
 //! model). Writes `bench.csv` and `bench.png` (error against time, log-log, the Pareto front
 //! highlighted) and prints the front.
 //!
-//! Timing is wall time from submit to the device going idle ([`skyrun::Rendered::gpu_wait`]),
+//! Timing is the passes' own time from GPU timestamp queries where the adapter has them
+//! ([`skyrun::Rendered::gpu_time`]; lavapipe does), else wall time from submit to the device
+//! going idle ([`skyrun::Rendered::gpu_wait`]); the CSV's `timer` column says which. Each time is
 //! the median of `--runs` renders after one warm-up render (which also gives the pixels
-//! measured). GPU timestamp queries are not used: skyrun's device requests no optional
-//! features, and on lavapipe, a CPU driver, submit-to-idle is the rendering itself.
+//! measured).
 //!
 //! The truth is cached as an EXR (see [`cache_dir`]), keyed by the scene, the image size, the
 //! truth's sample counts and every uniform; an entry is used only when its key file matches
@@ -181,7 +182,7 @@ fn bench(args: &BenchArgs) -> Result<(), ExitCode> {
         .map_err(|e| environment(format!("cannot create {}: {e}", args.out_dir.display())))?;
     let gpu = open_gpu()?;
     let adapter = gpu.adapter_info();
-    let timestamps = offers_timestamps(&gpu);
+    let timer = if gpu.has_timestamps() { "gpu_timestamps" } else { "wall" };
     let shader = loaded.compile(&gpu)?;
     let scene = args.scene.scene();
     let mut builtins = SkyBuiltins::from_scene(&scene, width, height);
@@ -228,7 +229,9 @@ fn bench(args: &BenchArgs) -> Result<(), ExitCode> {
                 bar.suspend(|| eprintln!("error: {err}"));
                 ExitCode::from(1)
             })?;
-            time += r.gpu_wait;
+            // The passes' own time from GPU timestamps where the device has them, else the
+            // host's wall time from submit to idle.
+            time += r.gpu_time.unwrap_or(r.gpu_wait);
             images.push(r.pixels);
         }
         Ok((images, time))
@@ -271,13 +274,13 @@ fn bench(args: &BenchArgs) -> Result<(), ExitCode> {
     mark_pareto(&mut rows);
 
     let csv_path = args.out_dir.join("bench.csv");
-    let csv = csv_text(&knobs, &rows, args.runs);
+    let csv = csv_text(&knobs, &rows, args.runs, timer);
     super::write_atomically(&csv_path, csv.as_bytes())
         .map_err(|e| environment(format!("cannot write {}: {e}", csv_path.display())))?;
     let png_path = args.out_dir.join("bench.png");
     let title = format!("{shader_name} on {}: {}x{} {}", adapter.name, width, height, projection_name(&args.scene));
     let defaults: Vec<i32> = knobs.iter().filter_map(|k| int_value(&base, &k.name)).collect();
-    plot(&png_path, &title, &rows, &knobs, &defaults).map_err(environment)?;
+    plot(&png_path, &title, &rows, &knobs, &defaults, timer).map_err(environment)?;
 
     println!(
         "gdsky bench: {shader_name}, {} configurations, {width}x{height} {}",
@@ -286,9 +289,13 @@ fn bench(args: &BenchArgs) -> Result<(), ExitCode> {
     );
     println!("adapter  {adapter}");
     println!(
-        "timer    wall time submit → idle, median of {} after a warm-up (GPU timestamp queries {}: not used)",
-        args.runs,
-        if timestamps { "offered by the adapter" } else { "not offered" }
+        "timer    {}, median of {} after a warm-up",
+        if timer == "wall" {
+            "wall time submit → idle (the adapter has no timestamp queries)"
+        } else {
+            "GPU timestamp queries around the passes"
+        },
+        args.runs
     );
     println!(
         "truth    skyref f64, {}/{} samples; error = |gdsky − truth| / max(|truth|, {:e}) over RGB",
@@ -300,12 +307,6 @@ fn bench(args: &BenchArgs) -> Result<(), ExitCode> {
     print!("{}", front_table(&knobs, &rows));
     println!("wrote    {} and {}", csv_path.display(), png_path.display());
     Ok(())
-}
-
-/// Whether the adapter offers GPU timestamp queries. gdsky does not depend on wgpu itself (skyrun
-/// owns the device), so the feature is read from the flags' names as wgpu prints them.
-fn offers_timestamps(gpu: &skyrun::Gpu) -> bool {
-    format!("{:?}", gpu.adapter().features()).contains("TIMESTAMP_QUERY")
 }
 
 fn projection_name(scene: &SceneArgs) -> &'static str {
@@ -335,11 +336,12 @@ fn ms(d: Duration) -> f64 {
 }
 
 /// The CSV: one row per configuration. Columns: the knobs (view_samples, sun_samples, …),
-/// time_ms (median), time_min_ms, time_max_ms, runs, timer (`wall`: submit → idle), mean_rel,
+/// time_ms (median), time_min_ms, time_max_ms, runs, timer (`gpu_timestamps`: the passes on the
+/// device; `wall`: submit → idle), mean_rel,
 /// p99_rel, max_rel (relative error in linear radiance against the truth, floor 1e-4),
 /// mean_abs_tonemapped (mean |Δ| after the preview's tone map), nan, inf (channels of gdsky's
 /// image), pareto (1 on the front).
-fn csv_text(knobs: &[Knob], rows: &[Row], runs: u32) -> String {
+fn csv_text(knobs: &[Knob], rows: &[Row], runs: u32, timer: &str) -> String {
     let mut out: String = knobs.iter().map(|k| format!("{},", k.name)).collect();
     out.push_str(
         "time_ms,time_min_ms,time_max_ms,runs,timer,mean_rel,p99_rel,max_rel,mean_abs_tonemapped,nan,inf,pareto\n",
@@ -350,7 +352,7 @@ fn csv_text(knobs: &[Knob], rows: &[Row], runs: u32) -> String {
         }
         let e = &r.errors;
         out.push_str(&format!(
-            "{:.3},{:.3},{:.3},{runs},wall,{:.6e},{:.6e},{:.6e},{:.6e},{},{},{}\n",
+            "{:.3},{:.3},{:.3},{runs},{timer},{:.6e},{:.6e},{:.6e},{:.6e},{},{},{}\n",
             ms(r.median),
             ms(r.min),
             ms(r.max),
@@ -393,7 +395,7 @@ fn front_table(knobs: &[Knob], rows: &[Row]) -> String {
 /// Draws mean relative error against median time, log-log: every configuration grey, the
 /// Pareto front red, connected and labelled with its knob values; the configuration with the
 /// uniforms' default values (`defaults`, when swept) ringed in black.
-fn plot(path: &Path, title: &str, rows: &[Row], knobs: &[Knob], defaults: &[i32]) -> Result<(), String> {
+fn plot(path: &Path, title: &str, rows: &[Row], knobs: &[Knob], defaults: &[i32], timer: &str) -> Result<(), String> {
     sweep::register_fonts();
     let (w, h) = (960u32, 640u32);
     let mut rgb = vec![255u8; (w * h * 3) as usize];
@@ -440,7 +442,11 @@ fn plot(path: &Path, title: &str, rows: &[Row], knobs: &[Knob], defaults: &[i32]
             .map_err(|e| err(&e))?;
         chart
             .configure_mesh()
-            .x_desc("render time, ms (median wall time, submit to idle)")
+            .x_desc(if timer == "wall" {
+                "render time, ms (median wall time, submit to idle)"
+            } else {
+                "render time, ms (median, GPU timestamps around the passes)"
+            })
             .y_desc("mean relative error vs converged f64")
             .y_label_formatter(&|v| format!("{v:.0e}"))
             .x_label_formatter(&|v| tick(*v))

@@ -54,7 +54,7 @@ impl Gpu {
     /// Opens the best Vulkan adapter: wgpu sorts discrete GPUs first, then integrated, other,
     /// virtual and last CPU adapters, so on a machine without a GPU this is lavapipe
     /// (`llvmpipe`, device type [`wgpu::DeviceType::Cpu`]). The device has no optional features
-    /// and wgpu's default limits.
+    /// but timestamp queries (when offered) and wgpu's default limits.
     pub fn new() -> Result<Gpu, NoAdapter> {
         let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
         desc.backends = wgpu::Backends::VULKAN;
@@ -66,9 +66,12 @@ impl Gpu {
             ..Default::default()
         }))
         .map_err(|e| NoAdapter { reason: e.to_string() })?;
+        // GPU timestamps time the passes themselves (`Rendered::gpu_time`) where the adapter
+        // has them (lavapipe does); nothing else is optional.
+        let required_features = adapter.features() & wgpu::Features::TIMESTAMP_QUERY;
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("skyrun"),
-            required_features: wgpu::Features::empty(),
+            required_features,
             required_limits: wgpu::Limits::default(),
             ..Default::default()
         }))
@@ -76,6 +79,12 @@ impl Gpu {
             reason: format!("adapter `{}` would not create a device: {e}", adapter.get_info().name),
         })?;
         Ok(Gpu { adapter, device, queue })
+    }
+
+    /// Whether renders are timed with GPU timestamp queries (the adapter offers
+    /// `TIMESTAMP_QUERY`), so [`crate::Rendered::gpu_time`] is set.
+    pub fn has_timestamps(&self) -> bool {
+        self.device.features().contains(wgpu::Features::TIMESTAMP_QUERY)
     }
 
     /// The adapter this device runs on.

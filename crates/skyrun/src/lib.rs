@@ -28,7 +28,8 @@
 //!   `fs_camera`, or `fs_cubemap` for [`Projection::CubeFace`]) into an Rgba32Float target,
 //!   copies it to a buffer with rows padded to wgpu's 256-byte alignment, waits for the device
 //!   and returns the pixels row 0 at the top, with the submit-to-idle time
-//!   ([`Rendered::gpu_wait`]). Pipelines are cached per entry point and format. Every wgpu
+//!   ([`Rendered::gpu_wait`]) and, where the device has timestamp queries (lavapipe does), the
+//!   passes' own time on the device ([`Rendered::gpu_time`]). Pipelines are cached per entry point and format. Every wgpu
 //!   error on the way is caught in error scopes and returned as a [`RenderError`] (an invalid
 //!   WGSL comes back with naga's message), never a panic from wgpu's default handler.
 //! * Godot's sub-passes ([`SubPasses`], from the shader's `use_half_res_pass` /

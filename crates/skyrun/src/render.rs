@@ -142,6 +142,10 @@ pub struct Rendered {
     /// Wall time from submitting the command buffer (all passes and the copy) until the device
     /// reported it done: the render time as the host sees it, without setup.
     pub gpu_wait: Duration,
+    /// The passes' own time on the device, from GPU timestamp queries (summed over the
+    /// sub-passes and the full pass; the copy excluded), when the device has them
+    /// ([`Gpu::has_timestamps`]).
+    pub gpu_time: Option<Duration>,
 }
 
 /// A converted sky shader compiled for one device, ready to render any number of times.
@@ -308,7 +312,7 @@ impl SkyShader {
             }
             _ => builtins,
         };
-        let (readback, submission, padded_row) =
+        let (readback, submission, padded_row, timestamps) =
             scoped(gpu, || self.record(gpu, projection, width, height, builtins, material))?;
         let submitted = Instant::now();
         let (sender, receiver) = mpsc::channel();
@@ -316,6 +320,12 @@ impl SkyShader {
             // The receiver outlives the poll below; a send error cannot happen.
             let _ = sender.send(result);
         });
+        let (stamp_sender, stamp_receiver) = mpsc::channel();
+        if let Some((buffer, _)) = &timestamps {
+            buffer.map_async(wgpu::MapMode::Read, .., move |result| {
+                let _ = stamp_sender.send(result);
+            });
+        }
         device
             .poll(wgpu::PollType::Wait { submission_index: Some(submission), timeout: Some(GPU_TIMEOUT) })
             .map_err(|e| RenderError::Poll(e.to_string()))?;
@@ -343,7 +353,22 @@ impl SkyShader {
             pixels
         };
         readback.unmap();
-        Ok(Rendered { pixels, gpu_wait })
+        let gpu_time = match (&timestamps, stamp_receiver.try_recv()) {
+            (Some((buffer, passes)), Ok(Ok(()))) => {
+                let view = buffer.get_mapped_range(..).map_err(|e| RenderError::Map(e.to_string()))?;
+                let ticks: Vec<u64> = view
+                    .chunks_exact(8)
+                    .map(|b| u64::from_le_bytes([b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]]))
+                    .collect();
+                drop(view);
+                buffer.unmap();
+                // Begin and end of each pass; ticks × the queue's period (ns per tick).
+                let total: u64 = (0..*passes).map(|p| ticks[2 * p + 1].saturating_sub(ticks[2 * p])).sum();
+                Some(Duration::from_secs_f64(total as f64 * f64::from(gpu.queue.get_timestamp_period()) * 1e-9))
+            }
+            _ => None,
+        };
+        Ok(Rendered { pixels, gpu_wait, gpu_time })
     }
 
     /// Records the sub-passes, the full pass and the copy, and submits them; returns the
@@ -357,10 +382,20 @@ impl SkyShader {
         height: u32,
         builtins: &SkyBuiltins,
         material: &[u8],
-    ) -> (wgpu::Buffer, wgpu::SubmissionIndex, u32) {
+    ) -> (wgpu::Buffer, wgpu::SubmissionIndex, u32, Option<(wgpu::Buffer, usize)>) {
         let device = &gpu.device;
         let entry = fragment_entry(projection);
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("sky") });
+        // Two timestamps per pass (at most quarter, half, full).
+        const MAX_PASSES: u32 = 3;
+        let queries = gpu.has_timestamps().then(|| {
+            device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("sky pass times"),
+                ty: wgpu::QueryType::Timestamp,
+                count: 2 * MAX_PASSES,
+            })
+        });
+        let mut passes = 0u32;
         let material_buffer = self
             .bindings
             .iter()
@@ -387,7 +422,8 @@ impl SkyShader {
             let sub = SkyBuiltins { screen_size: [w as f32, h as f32], render_pass: pass, ..*builtins };
             let groups =
                 self.bind_groups(gpu, &sub, material_buffer.as_ref(), half_view.as_ref(), quarter_view.as_ref());
-            self.draw(gpu, &mut encoder, &view, entry, SUB_PASS_FORMAT, &groups);
+            self.draw(gpu, &mut encoder, &view, entry, SUB_PASS_FORMAT, &groups, queries.as_ref().map(|q| (q, passes)));
+            passes += 1;
             match pass {
                 RenderPass::Quarter => quarter_view = Some(view),
                 _ => half_view = Some(view),
@@ -398,8 +434,26 @@ impl SkyShader {
         let view = target.create_view(&wgpu::TextureViewDescriptor::default());
         let groups =
             self.bind_groups(gpu, builtins, material_buffer.as_ref(), half_view.as_ref(), quarter_view.as_ref());
-        self.draw(gpu, &mut encoder, &view, entry, FULL_FORMAT, &groups);
-
+        self.draw(gpu, &mut encoder, &view, entry, FULL_FORMAT, &groups, queries.as_ref().map(|q| (q, passes)));
+        passes += 1;
+        let timestamps = queries.map(|set| {
+            let bytes = u64::from(2 * passes) * 8;
+            let resolved = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("pass times"),
+                size: bytes,
+                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            });
+            let read = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("pass times readback"),
+                size: bytes,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            encoder.resolve_query_set(&set, 0..2 * passes, &resolved, 0);
+            encoder.copy_buffer_to_buffer(&resolved, 0, &read, 0, bytes);
+            (read, passes as usize)
+        });
         let padded_row =
             (width * BYTES_PER_PIXEL).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
         let readback = device.create_buffer(&wgpu::BufferDescriptor {
@@ -421,7 +475,7 @@ impl SkyShader {
             wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
         );
         let submission = gpu.queue.submit([encoder.finish()]);
-        (readback, submission, padded_row)
+        (readback, submission, padded_row, timestamps)
     }
 
     /// One bind group per declared group, filled with the scene's resources or stand-ins.
@@ -503,7 +557,9 @@ impl SkyShader {
             .collect()
     }
 
-    /// Draws the fullscreen triangle into `view`.
+    /// Draws the fullscreen triangle into `view`; with `timestamps` = (set, pass index), writes
+    /// the pass's begin and end times at 2·index and 2·index + 1.
+    #[allow(clippy::too_many_arguments)]
     fn draw(
         &self,
         gpu: &Gpu,
@@ -512,6 +568,7 @@ impl SkyShader {
         entry: &'static str,
         format: wgpu::TextureFormat,
         groups: &[wgpu::BindGroup],
+        timestamps: Option<(&wgpu::QuerySet, u32)>,
     ) {
         let pipeline = self.pipeline(gpu, entry, format);
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -526,7 +583,11 @@ impl SkyShader {
                 },
             })],
             depth_stencil_attachment: None,
-            timestamp_writes: None,
+            timestamp_writes: timestamps.map(|(query_set, index)| wgpu::RenderPassTimestampWrites {
+                query_set,
+                beginning_of_pass_write_index: Some(2 * index),
+                end_of_pass_write_index: Some(2 * index + 1),
+            }),
             occlusion_query_set: None,
             multiview_mask: None,
         });

@@ -104,10 +104,14 @@ fn freeman_scene_matrix_matches_skyref_f32() {
                 };
                 let (w, h) = if projection == Projection::Panorama { PANORAMA } else { CAMERA };
                 let builtins = SkyBuiltins::from_scene(&scene, w, h);
-                let gpu_image = shader
+                let rendered = shader
                     .render(&gpu, projection, w, h, &builtins, &material)
-                    .unwrap_or_else(|e| panic!("{projection:?} sun {sun} alt {altitude}: {e}"))
-                    .pixels;
+                    .unwrap_or_else(|e| panic!("{projection:?} sun {sun} alt {altitude}: {e}"));
+                // Where the device has timestamp queries, every render is timed by them.
+                if gpu.has_timestamps() && rendered.gpu_time.is_none_or(|t| t <= std::time::Duration::ZERO) {
+                    failures.push(format!("{projection:?}: no GPU time although the device has timestamps"));
+                }
+                let gpu_image = rendered.pixels;
                 let f32_image = skyref::f32::render(&params, &scene, projection, w, h);
                 let f64_image = skyref::f64::render(&params, &scene, projection, w, h);
                 let f64_as_f32: Vec<[f32; 4]> =
