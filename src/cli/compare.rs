@@ -73,8 +73,7 @@ pub fn run(args: &CompareArgs) -> ExitCode {
         eprintln!("wrote {}", path.display());
     }
     if let Some(path) = &args.side_by_side {
-        let written =
-            skyrun::write_side_by_side_png(path, &[&a, &b], skyrun::DEFAULT_EXPOSURE, skyrun::DEFAULT_WHITE);
+        let written = skyrun::write_side_by_side_png(path, &[&a, &b], skyrun::DEFAULT_EXPOSURE, skyrun::DEFAULT_WHITE);
         if let Err(err) = written {
             eprintln!("error: {err}");
             return ExitCode::from(2);
