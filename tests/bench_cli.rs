@@ -2,30 +2,19 @@
 //! truth cache (reused, and recomputed when corrupt). No timing assertions. Needs a Vulkan
 //! adapter (lavapipe on a machine without a GPU).
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
+use common::{gdsky_with, scratch as scratch_in, text};
+use std::path::{Path, PathBuf};
+use std::process::Output;
+
+/// `gdsky` with its truth cache in `cache`.
 fn gdsky(args: &[&str], cache: &Path) -> Output {
-    let runtime = std::env::temp_dir().join("gdsky-xdg-runtime");
-    let _ = std::fs::create_dir_all(&runtime);
-    Command::new(env!("CARGO_BIN_EXE_gdsky"))
-        .args(args)
-        .env("XDG_RUNTIME_DIR", runtime)
-        .env("GDSKY_CACHE_DIR", cache)
-        .env("NO_COLOR", "1")
-        .output()
-        .expect("the gdsky binary runs")
+    gdsky_with(args, &[("GDSKY_CACHE_DIR", cache)])
 }
 
 fn scratch(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("bench_cli").join(name);
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("scratch dir");
-    dir
-}
-
-fn text(o: &Output) -> String {
-    format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr))
+    scratch_in("bench_cli", name)
 }
 
 const COLUMNS: &str = "view_samples,sun_samples,time_ms,time_min_ms,time_max_ms,runs,timer,mean_rel,p99_rel,max_rel,\

@@ -2,29 +2,14 @@
 //! `demo`, their outputs and their exit codes (0 ok, 1 wrong input or failed comparison,
 //! 2 wrong environment). They need a Vulkan adapter (lavapipe on a machine without a GPU).
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-fn gdsky(args: &[&str]) -> Output {
-    let runtime = std::env::temp_dir().join("gdsky-xdg-runtime");
-    let _ = std::fs::create_dir_all(&runtime);
-    Command::new(env!("CARGO_BIN_EXE_gdsky"))
-        .args(args)
-        .env("XDG_RUNTIME_DIR", runtime)
-        .env("NO_COLOR", "1")
-        .output()
-        .expect("the gdsky binary runs")
-}
+use common::{gdsky, gdsky_with, scratch as scratch_in, text};
+use std::path::{Path, PathBuf};
+use std::process::Output;
 
 fn scratch(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("render_cli").join(name);
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("scratch dir");
-    dir
-}
-
-fn text(o: &Output) -> String {
-    format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr))
+    scratch_in("render_cli", name)
 }
 
 fn arg(p: &Path) -> &str {
@@ -148,14 +133,12 @@ fn bad_input_is_exit_1_and_a_bad_environment_exit_2() {
 #[test]
 fn no_vulkan_adapter_is_exit_2_with_the_package_to_install() {
     let dir = scratch("no_adapter");
-    let o = Command::new(env!("CARGO_BIN_EXE_gdsky"))
-        .args(["render", "-o", arg(&dir.join("x.exr"))])
-        .env("XDG_RUNTIME_DIR", &dir)
-        // Point the Vulkan loader at a driver list that does not exist.
-        .env("VK_ICD_FILENAMES", dir.join("none.json"))
-        .env("VK_DRIVER_FILES", dir.join("none.json"))
-        .output()
-        .expect("runs");
+    // Point the Vulkan loader at a driver list that does not exist.
+    let none = dir.join("none.json");
+    let o = gdsky_with(
+        &["render", "-o", arg(&dir.join("x.exr"))],
+        &[("VK_ICD_FILENAMES", &none), ("VK_DRIVER_FILES", &none)],
+    );
     assert_eq!(o.status.code(), Some(2), "{}", text(&o));
     assert!(text(&o).contains("mesa-vulkan-drivers"), "{}", text(&o));
 }

@@ -4,29 +4,14 @@
 //! of issue #5 (0.5 m, sun on the horizon: p99.9 ≤ 1e-3 and worst ≤ 1/10 of the original's).
 //! No timing. Needs a Vulkan adapter (lavapipe on a machine without a GPU).
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-fn gdsky(args: &[&str]) -> Output {
-    let runtime = std::env::temp_dir().join("gdsky-xdg-runtime");
-    let _ = std::fs::create_dir_all(&runtime);
-    Command::new(env!("CARGO_BIN_EXE_gdsky"))
-        .args(args)
-        .env("XDG_RUNTIME_DIR", runtime)
-        .env("NO_COLOR", "1")
-        .output()
-        .expect("the gdsky binary runs")
-}
+use common::{gdsky, scratch as scratch_in, text};
+use std::path::{Path, PathBuf};
+use std::process::Output;
 
 fn scratch(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("stress_cli").join(name);
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("scratch dir");
-    dir
-}
-
-fn text(o: &Output) -> String {
-    format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr))
+    scratch_in("stress_cli", name)
 }
 
 /// The fields of the `summary:` line.

@@ -278,8 +278,9 @@ impl SkyShader {
     /// [`SkyBuiltins::from_scene`] does); the sub-passes get the same built-ins with their own
     /// size and pass. `material` fills the material block (group 1 binding 0), zero-padded to
     /// the block's size and refused when shorter. Stand-ins, documented in the crate essay:
-    /// material textures are a white texel, RADIANCE a black cube, a sub-pass texture that is
-    /// not rendered a white texel (as Godot binds), global uniforms zero.
+    /// material textures their hint's default texel ([`SkyShader::with_texture_defaults`];
+    /// white without one), RADIANCE a black cube, a sub-pass texture that is not rendered a
+    /// white texel (as Godot binds), global uniforms zero.
     pub fn render(
         &self,
         gpu: &Gpu,
@@ -372,8 +373,9 @@ impl SkyShader {
     }
 
     /// Records the sub-passes, the full pass and the copy, and submits them; returns the
-    /// read-back buffer, the submission and the padded row size. Errors surface through the
-    /// caller's error scopes.
+    /// read-back buffer, the submission, the padded row size and, with timestamp queries, their
+    /// read-back buffer and the number of passes timed. Errors surface through the caller's
+    /// error scopes.
     fn record(
         &self,
         gpu: &Gpu,

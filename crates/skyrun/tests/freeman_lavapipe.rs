@@ -4,9 +4,10 @@
 //! One test function, so the environment is set before any thread reads it and one device
 //! serves both projections. Without a Vulkan adapter the test fails: it does not skip.
 
+mod common;
+
 use skyref::{FreemanParams, Projection, Scene};
-use skyrun::{Gpu, SkyBuiltins, compare, freeman_material, render, worst_pixels};
-use std::path::Path;
+use skyrun::{SkyBuiltins, compare, freeman_material, render, worst_pixels};
 use std::time::Instant;
 
 const WIDTH: u32 = 64;
@@ -19,23 +20,11 @@ const P99_BOUND: f64 = 1e-3;
 #[test]
 fn freeman_on_the_gpu_matches_skyref() {
     let start = Instant::now();
-    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
-        // SAFETY: this binary has a single test and sets the variable before creating any
-        // thread (wgpu and the Vulkan loader are not initialised yet).
-        unsafe { std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir()) };
-    }
 
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/freeman_sky.gdshader");
-    let front = gdshader::check_file(&path).expect("fixture readable");
-    let lowered = gdsky_naga::lower(&front).expect("the Freeman sky lowers");
-    let wgsl = gdsky_naga::to_wgsl(&lowered).expect("WGSL");
+    let gpu = common::gpu();
+    let (_, lowered, wgsl) = common::converted_freeman();
     let params = FreemanParams::default();
     let material = freeman_material(&lowered, &params);
-
-    let gpu = Gpu::new().unwrap_or_else(|e| {
-        panic!("this test needs a Vulkan adapter and found none: {e}");
-    });
-    eprintln!("adapter: {}", gpu.adapter_info());
 
     let panorama_scene = Scene {
         sun_elevation_deg: 10.0,

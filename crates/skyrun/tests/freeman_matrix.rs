@@ -33,8 +33,10 @@
 //! One test function, so the environment is set before any thread reads it and one device
 //! serves all renders. Without a Vulkan adapter the test fails: it does not skip.
 
+mod common;
+
 use skyref::{FreemanParams, Projection, Scene};
-use skyrun::{Gpu, SkyBuiltins, SkyShader, SubPasses, compare, freeman_material, worst_pixels};
+use skyrun::{SkyBuiltins, SkyShader, SubPasses, compare, freeman_material, worst_pixels};
 use std::path::Path;
 use std::time::Instant;
 
@@ -57,19 +59,10 @@ const CAMERA: (u32, u32) = (96, 64);
 #[test]
 fn freeman_scene_matrix_matches_skyref_f32() {
     let start = Instant::now();
-    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
-        // SAFETY: this binary has a single test and sets the variable before creating any
-        // thread (wgpu and the Vulkan loader are not initialised yet).
-        unsafe { std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir()) };
-    }
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/freeman_sky.gdshader");
-    let front = gdshader::check_file(&path).expect("fixture readable");
-    let lowered = gdsky_naga::lower(&front).expect("the Freeman sky lowers");
-    let wgsl = gdsky_naga::to_wgsl(&lowered).expect("WGSL");
+    let gpu = common::gpu();
+    let (front, lowered, wgsl) = common::converted_freeman();
     let params = FreemanParams::default();
     let material = freeman_material(&lowered, &params);
-    let gpu = Gpu::new().unwrap_or_else(|e| panic!("this test needs a Vulkan adapter and found none: {e}"));
-    eprintln!("adapter: {}", gpu.adapter_info());
     let shader = SkyShader::new(&gpu, &wgsl, SubPasses::of(&front)).expect("the converted module compiles");
 
     eprintln!(

@@ -6,9 +6,10 @@
 //! One test function, so the environment is set before any thread reads it and one device
 //! serves every render. Without a Vulkan adapter the test fails: it does not skip.
 
+mod common;
+
 use skyref::{FreemanParams, Projection, Scene};
-use skyrun::{Gpu, SkyBuiltins, compare, freeman_material, render, worst_pixels};
-use std::path::Path;
+use skyrun::{SkyBuiltins, compare, freeman_material, render, worst_pixels};
 
 /// The hand port, as the benchmark loads it.
 const HAND_WGSL: &str = include_str!("../benches/freeman_hand.wgsl");
@@ -52,16 +53,8 @@ fn uniform_bindings(module: &naga::Module) -> Vec<(u32, u32, String)> {
 
 #[test]
 fn hand_port_matches_skyref_and_the_converted_shader() {
-    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
-        // SAFETY: this binary has a single test and sets the variable before creating any
-        // thread (wgpu and the Vulkan loader are not initialised yet).
-        unsafe { std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir()) };
-    }
-
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/freeman_sky.gdshader");
-    let front = gdshader::check_file(&path).expect("fixture readable");
-    let lowered = gdsky_naga::lower(&front).expect("the Freeman sky lowers");
-    let converted = gdsky_naga::to_wgsl(&lowered).expect("WGSL");
+    let gpu = common::gpu();
+    let (_, lowered, converted) = common::converted_freeman();
     let params = FreemanParams::default();
     // Filled at the lowering's offsets: the hand port must lay its block out the same way.
     let material = freeman_material(&lowered, &params);
@@ -92,11 +85,6 @@ fn hand_port_matches_skyref_and_the_converted_shader() {
             failures.push(format!("the hand port has no entry point {entry}"));
         }
     }
-
-    let gpu = Gpu::new().unwrap_or_else(|e| {
-        panic!("this test needs a Vulkan adapter and found none: {e}");
-    });
-    eprintln!("adapter: {}", gpu.adapter_info());
 
     let panorama_scene = Scene {
         sun_elevation_deg: 10.0,

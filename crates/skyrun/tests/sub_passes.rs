@@ -5,16 +5,10 @@
 //! Expected values are worked out by hand from the shaders below (values exact in f16, the
 //! sub-pass format), not taken from a render.
 
+mod common;
+
 use skyref::Projection;
 use skyrun::{Gpu, SkyBuiltins, SkyShader, SubPasses};
-
-fn gpu() -> Gpu {
-    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
-        // SAFETY: set before any thread of this test binary starts wgpu (single test below).
-        unsafe { std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir()) };
-    }
-    Gpu::new().unwrap_or_else(|e| panic!("this test needs a Vulkan adapter and found none: {e}"))
-}
 
 /// Converts shader text and renders a 64×32 panorama with its sub-passes.
 fn render(gpu: &Gpu, source: &str) -> Vec<[f32; 4]> {
@@ -30,7 +24,7 @@ fn render(gpu: &Gpu, source: &str) -> Vec<[f32; 4]> {
 
 #[test]
 fn sub_passes_run_in_godots_order_and_feed_the_full_pass() {
-    let gpu = gpu();
+    let gpu = common::gpu();
 
     // Quarter writes a constant; half doubles what quarter wrote and adds its own texture
     // (white, because the half pass is being rendered); the full pass combines both.
