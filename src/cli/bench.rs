@@ -19,6 +19,7 @@
 
 use super::scene::{ProjectionArg, SceneArgs, open_gpu, strip};
 use super::sweep::{self, ErrorStats};
+use super::{environment, usage};
 use clap::Args;
 use plotters::prelude::*;
 use skyref::converged::Converged;
@@ -95,16 +96,6 @@ pub fn run(args: &BenchArgs) -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(code) => code,
     }
-}
-
-fn usage(message: impl std::fmt::Display) -> ExitCode {
-    eprintln!("error: {message}");
-    ExitCode::from(1)
-}
-
-fn environment(message: impl std::fmt::Display) -> ExitCode {
-    eprintln!("error: {message}");
-    ExitCode::from(2)
 }
 
 /// The knobs: the defaults, each replaced or extended by a `--knob`.

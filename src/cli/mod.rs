@@ -13,6 +13,7 @@ pub mod sweep;
 
 use std::io::Write;
 use std::path::Path;
+use std::process::ExitCode;
 
 /// Writes `bytes` to `path` atomically: into a temporary file beside it, then renamed over it,
 /// so a reader (or a failed run) never sees a half-written file.
@@ -30,4 +31,17 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
         let _ = std::fs::remove_file(&tmp);
     }
     result
+}
+
+/// Prints `message` as an error and gives exit code 1: the input is wrong (CLI contract).
+pub fn usage(message: impl std::fmt::Display) -> ExitCode {
+    eprintln!("error: {message}");
+    ExitCode::from(1)
+}
+
+/// Prints `message` as an error and gives exit code 2: the environment is wrong (no adapter, a
+/// file that cannot be read or written).
+pub fn environment(message: impl std::fmt::Display) -> ExitCode {
+    eprintln!("error: {message}");
+    ExitCode::from(2)
 }

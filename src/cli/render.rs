@@ -1,6 +1,7 @@
 //! `gdsky render [FILE] -o OUT.exr …` and `gdsky reference -o OUT.exr … [--precision f32|f64]`.
 
 use super::scene::{SceneArgs, load_shader, open_gpu, strip, write_outputs};
+use super::usage;
 use clap::{Args, ValueEnum};
 use skyrun::{SkyBuiltins, material_with_defaults};
 use std::path::PathBuf;
@@ -120,10 +121,4 @@ pub fn freeman_params(overrides: &[(String, String)]) -> Result<skyref::FreemanP
         params.set(name, text)?;
     }
     Ok(params)
-}
-
-/// Prints a usage problem and gives exit code 1 (the input is wrong).
-fn usage(message: impl std::fmt::Display) -> ExitCode {
-    eprintln!("error: {message}");
-    ExitCode::from(1)
 }

@@ -16,6 +16,7 @@
 
 use super::scene::{BUNDLED_NAME, open_gpu};
 use super::sweep::{self, ErrorStats, sci};
+use super::{environment, usage};
 use clap::Args;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
@@ -157,16 +158,6 @@ pub fn run(args: &StressArgs) -> ExitCode {
         Ok(code) => code,
         Err(code) => code,
     }
-}
-
-fn usage(message: impl std::fmt::Display) -> ExitCode {
-    eprintln!("error: {message}");
-    ExitCode::from(1)
-}
-
-fn environment(message: impl std::fmt::Display) -> ExitCode {
-    eprintln!("error: {message}");
-    ExitCode::from(2)
 }
 
 /// The hint_range ends of FILE's uniforms, as text (`rayleigh_scale_height`, `0.0`, `100000.0`).
