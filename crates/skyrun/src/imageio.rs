@@ -1,15 +1,13 @@
 //! Image files: OpenEXR for exact f32 data, PNG previews and error heatmaps for people.
 //!
 //! Every writer encodes the whole file in memory first and then replaces the target in one
-//! rename (see [`write_atomically`]), so a failed or interrupted write never leaves a truncated
-//! file, or a file half old and half new, where a reference image used to be.
+//! rename (see [`crate::safe_io`]), so a failed or interrupted write never leaves a truncated
+//! file, or a file half old and half new, where a reference image used to be; the target must be
+//! a regular file, absent, or a symbolic link to one.
 
-use std::ffi::OsString;
 use std::fmt;
-use std::fs;
-use std::io::{self, Cursor, Write};
+use std::io::{self, Cursor};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
 
 use exr::prelude::{
     Encoding, MetaData, ReadChannels, ReadLayers, ReadSpecificChannel, SampleType, SpecificChannels, Vec2,
@@ -74,13 +72,7 @@ pub enum ImageError {
 impl fmt::Display for ImageError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            Self::Io { path, action, source } => {
-                write!(f, "could not {action} {}: {source}", path.display())?;
-                if source.kind() == io::ErrorKind::NotFound && *action != "read" {
-                    write!(f, " (does the directory {} exist?)", parent_dir(path).display())?;
-                }
-                Ok(())
-            }
+            Self::Io { path, action, source } => write!(f, "could not {action} {}: {source}", path.display()),
             Self::Exr { path, action, source } => {
                 write!(f, "could not {action} OpenEXR file {}: {source}", path.display())
             }
@@ -112,49 +104,14 @@ impl std::error::Error for ImageError {
     }
 }
 
-fn parent_dir(path: &Path) -> &Path {
-    match path.parent() {
-        Some(dir) if !dir.as_os_str().is_empty() => dir,
-        _ => Path::new("."),
-    }
-}
-
 fn io_error(path: &Path, action: &'static str, source: io::Error) -> ImageError {
     ImageError::Io { path: path.to_owned(), action, source }
 }
 
-/// Writes `bytes` to a fresh temporary file next to `path` (same directory, hence same file
-/// system, so the rename cannot degrade into a copy), flushes it to disk and renames it over
-/// `path`. Readers see either the old file or the complete new one; on any failure the
-/// temporary file is removed and `path` is untouched.
+/// Writes an encoded image with the one safe writer, [`crate::safe_io::write_atomically`]
+/// (through symbolic links, never over a directory, device, FIFO or socket).
 fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), ImageError> {
-    static COUNTER: AtomicU64 = AtomicU64::new(0);
-    let Some(name) = path.file_name() else {
-        let message = "the path does not name a file";
-        return Err(io_error(path, "write", io::Error::new(io::ErrorKind::InvalidInput, message)));
-    };
-    // Dot-prefixed, with the process id and a counter, so that concurrent writers (threads or
-    // processes) never share a temporary file and `ls` does not show it.
-    let mut tmp_name = OsString::from(".");
-    tmp_name.push(name);
-    tmp_name.push(format!(".{}-{}.tmp", std::process::id(), COUNTER.fetch_add(1, Ordering::Relaxed)));
-    let tmp = parent_dir(path).join(tmp_name);
-
-    // `create_new` so that a stale file of that name is never truncated or followed as a link.
-    let mut file = fs::OpenOptions::new()
-        .write(true)
-        .create_new(true)
-        .open(&tmp)
-        .map_err(|e| io_error(path, "create a temporary file for", e))?;
-    let result =
-        file.write_all(bytes).and_then(|()| file.sync_all()).map_err(|e| io_error(&tmp, "write", e)).and_then(|()| {
-            drop(file); // closed before the rename, which Windows requires
-            fs::rename(&tmp, path).map_err(|e| io_error(path, "replace", e))
-        });
-    if result.is_err() {
-        let _ = fs::remove_file(&tmp);
-    }
-    result
+    crate::safe_io::write_atomically(path, bytes).map_err(|e| io_error(path, "write", e))
 }
 
 /// Writes `image` as OpenEXR: one layer, channels R, G, B, A as 32-bit floats, scanlines
@@ -181,9 +138,44 @@ pub fn write_exr(path: &Path, image: &Image) -> Result<(), ImageError> {
     write_atomically(path, bytes.get_ref())
 }
 
-/// Largest image [`read_exr`] accepts: 16384 × 8192 pixels (2 GiB as f32 RGBA). A header can
+/// Largest width or height of one rendered view, in pixels: the `max_texture_dimension_2d` of
+/// wgpu's default limits, which [`crate::Gpu::new`] opens the device with (lavapipe offers
+/// 16384, but the render target is created under the requested limits). `gdsky`'s `--size`,
+/// `render`, `reference`, cubemap faces, `bench` and `oracle` all use it through
+/// [`check_render_size`].
+pub const MAX_RENDER_SIDE: u32 = 8192;
+
+/// Most pixels of one rendered view, counting the width rounded up to a multiple of 16: the
+/// read-back buffer holds 16 bytes a pixel in rows padded to 256 bytes, and must fit wgpu's
+/// default `max_buffer_size`, 256 MiB. 2²⁴ = 16,777,216 pixels: 4096 × 4096, 8192 × 2048.
+pub const MAX_RENDER_PIXELS: u64 = 1 << 24;
+
+/// Checks a view size against what the renderer can do ([`MAX_RENDER_SIDE`],
+/// [`MAX_RENDER_PIXELS`]); the message names the limit that is exceeded.
+pub fn check_render_size(width: u32, height: u32) -> Result<(), String> {
+    if !(1..=MAX_RENDER_SIDE).contains(&width) || !(1..=MAX_RENDER_SIDE).contains(&height) {
+        return Err(format!("{width}x{height}: each side must be between 1 and {MAX_RENDER_SIDE} pixels"));
+    }
+    let padded = u64::from(width.next_multiple_of(16)) * u64::from(height);
+    if padded > MAX_RENDER_PIXELS {
+        return Err(format!(
+            "{width}x{height}: at most {MAX_RENDER_PIXELS} pixels (4096x4096, 8192x2048; the width counted rounded \
+             up to a multiple of 16), the device's 256 MiB read-back limit"
+        ));
+    }
+    Ok(())
+}
+
+/// Largest image [`read_exr`] accepts: 16384 × 8192 pixels (2 GiB as f32 RGBA), room for the
+/// largest image gdsky writes (a cubemap strip of six [`MAX_RENDER_PIXELS`] faces). A header can
 /// claim any size; checking before allocating keeps a corrupt file from exhausting memory.
-const MAX_READ_PIXELS: usize = 1 << 27;
+pub const MAX_READ_PIXELS: usize = 1 << 27;
+const _: () = assert!(6 * MAX_RENDER_PIXELS <= MAX_READ_PIXELS as u64);
+
+/// Largest EXR file [`read_exr`] reads: an uncompressed RGBA f32 image of [`MAX_READ_PIXELS`]
+/// (2 GiB) plus 64 MiB for headers, offset tables and other channels (2112 MiB in all). A larger
+/// file is refused unread.
+pub const MAX_EXR_BYTES: u64 = MAX_READ_PIXELS as u64 * 16 + (64 << 20);
 
 /// Pixel storage while the exr crate decodes, with a record of which pixels arrived.
 struct Pixels {
@@ -201,9 +193,11 @@ struct Pixels {
 /// Anything else is an error naming the file and what is missing: deep data, integer or
 /// subsampled colour channels, no R/G/B (the message lists the channels that are there),
 /// images over 2²⁷ pixels. Truncated or corrupt files are errors too, never panics (a panic
-/// inside the exr crate is caught and returned as an error).
+/// inside the exr crate is caught and returned as an error). The file is read with
+/// [`crate::safe_io::read_limited`]: a regular file (a FIFO, a device, a socket or a directory is
+/// refused before it is opened) of at most [`MAX_EXR_BYTES`].
 pub fn read_exr(path: &Path) -> Result<Image, ImageError> {
-    let bytes = fs::read(path).map_err(|e| io_error(path, "read", e))?;
+    let bytes = crate::safe_io::read_limited(path, MAX_EXR_BYTES).map_err(|e| io_error(path, "read", e))?;
     decode_exr(path, &bytes)
 }
 
@@ -511,6 +505,7 @@ pub fn write_heatmap_png(path: &Path, a: &Image, b: &Image, floor: f32) -> Resul
 mod tests {
     use super::*;
     use exr::prelude::f16;
+    use std::fs;
 
     /// A fresh directory under the system temp dir, removed on drop.
     struct TempDir(PathBuf);
@@ -559,6 +554,19 @@ mod tests {
         assert_eq!((info.color_type, info.bit_depth), (png::ColorType::Rgb, png::BitDepth::Eight));
         let rgb = buf[..info.buffer_size()].chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
         (info.width, info.height, rgb)
+    }
+
+    #[test]
+    fn render_size_limits_are_the_devices() {
+        let limits = wgpu::Limits::default();
+        assert_eq!(MAX_RENDER_SIDE, limits.max_texture_dimension_2d);
+        assert_eq!(MAX_RENDER_PIXELS * 16, limits.max_buffer_size);
+        for (w, h) in [(1, 1), (8192, 2048), (4096, 4096), (8191, 2048), (256, 128)] {
+            assert!(check_render_size(w, h).is_ok(), "{w}x{h}");
+        }
+        for (w, h) in [(0, 4), (4, 0), (8193, 1), (1, 8193), (8192, 2049), (4097, 4095), (8192, 8192)] {
+            assert!(check_render_size(w, h).is_err(), "{w}x{h}");
+        }
     }
 
     #[test]
@@ -690,12 +698,12 @@ mod tests {
         let image = test_image(4, 3);
         let err = write_exr(&dir.0.join("no-such-dir/sky.exr"), &image).unwrap_err();
         assert!(matches!(err, ImageError::Io { .. }), "{err}");
-        assert!(err.to_string().contains("no-such-dir") && err.to_string().contains("exist?"), "{err}");
+        assert!(err.to_string().contains("no-such-dir does not exist"), "{err}");
         assert!(write_png_preview(&dir.0.join("no-such-dir/sky.png"), &image, 1.0, DEFAULT_WHITE).is_err());
         assert!(write_heatmap_png(&dir.0.join("no-such-dir/sky.png"), &image, &image, 1e-4).is_err());
         assert_eq!(dir.entries(), Vec::<String>::new(), "no stray temporary files");
 
-        // Target is a non-empty directory: the temporary file is written, the rename fails.
+        // Target is a non-empty directory: refused before anything is written.
         let target = dir.0.join("sky.exr");
         fs::create_dir(&target).unwrap();
         fs::write(target.join("keep"), b"x").unwrap();

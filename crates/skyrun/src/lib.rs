@@ -47,6 +47,14 @@
 //! * [`write_exr`] / [`read_exr`] (RGBA f32, ZIP, row 0 at the top, written atomically),
 //!   [`write_png_preview`] (Bruneton's demo tone map), [`write_heatmap_png`] (log-scale relative
 //!   error), [`write_side_by_side_png`].
+//! * [`safe_io`]: the one atomic writer of the workspace (every `gdsky` command and
+//!   `gdsky::build` write through it: through symbolic links to their target, never over a
+//!   directory, device, FIFO or socket), the output checks commands run before any work, and
+//!   bounded reading of regular files only. It lives here because skyrun is the lowest crate
+//!   that writes files (its images) and that both the CLI and the build-script API depend on;
+//!   the reading half comes from `gdshader`, which reads shaders below everything else.
+//! * [`check_render_size`]: the largest view the renderer can draw ([`MAX_RENDER_SIDE`] a side,
+//!   [`MAX_RENDER_PIXELS`]), the one limit `--size` and every command share.
 //! * [`compare`] reduces two images to relative-error statistics over RGB
 //!   (|a − b| / max(|b|, floor): max, p99.9, p99, mean, PSNR, NaN and Inf counts), and
 //!   [`worst_pixels`] lists where the largest differences are, with both pixels' values.
@@ -108,11 +116,13 @@ mod imageio;
 mod material;
 mod metrics;
 mod render;
+pub mod safe_io;
 
 pub use builtins::{RenderPass, SkyBuiltins, SkyLight, offsets};
 pub use gpu::{AdapterSummary, Gpu, NoAdapter};
 pub use imageio::{
-    DEFAULT_EXPOSURE, DEFAULT_WHITE, Image, ImageError, read_exr, write_exr, write_heatmap_png, write_png_preview,
+    DEFAULT_EXPOSURE, DEFAULT_WHITE, Image, ImageError, MAX_EXR_BYTES, MAX_READ_PIXELS, MAX_RENDER_PIXELS,
+    MAX_RENDER_SIDE, check_render_size, read_exr, write_exr, write_heatmap_png, write_png_preview,
     write_side_by_side_png,
 };
 pub use material::{
