@@ -1,5 +1,6 @@
 //! Feeds arbitrary bytes to the whole front end (UTF-8 check, preprocessor, parser, checker),
-//! and lowers every shader it accepts to naga IR and validates it.
+//! lowers every shader it accepts to naga IR and validates it, then writes WGSL and SPIR-V and
+//! reads both back with naga's own front ends (`to_wgsl`/`to_spirv` re-read and validate).
 //! Any panic is a bug: the front end must answer every input with diagnostics. Includes are
 //! served from memory so `#include` paths, depth limits and cycles are exercised too.
 #![no_main]
@@ -21,14 +22,27 @@ impl Loader for SelfLoader<'_> {
 }
 
 libfuzzer_sys::fuzz_target!(|data: &[u8]| {
-    let output = gdshader::check_source("fuzz.gdshader", data.to_vec(), Some("fuzz.gdshader".into()), &mut SelfLoader(data));
+    let output =
+        gdshader::check_source("fuzz.gdshader", data.to_vec(), Some("fuzz.gdshader".into()), &mut SelfLoader(data));
     // E999 is what a caught panic in the front end turns into.
     assert!(output.diagnostics.iter().all(|d| d.code != "E999"));
     // A shader the checker accepts must lower to a module naga accepts, or be refused as not
-    // translatable yet (E600); E601 would be a bug in the lowering.
-    if output.shader.is_some()
-        && let Err(diagnostics) = gdsky_naga::lower(&output)
-    {
-        assert!(diagnostics.iter().all(|d| d.code != gdsky_naga::INVALID_MODULE), "{:?}", diagnostics);
+    // translatable yet (E600); E601 would be a bug in the lowering. What it emits must read back
+    // (E604 would be a bug too).
+    if output.shader.is_none() {
+        return;
+    }
+    match gdsky_naga::lower(&output) {
+        Err(diagnostics) => {
+            assert!(diagnostics.iter().all(|d| d.code != gdsky_naga::INVALID_MODULE), "{:?}", diagnostics);
+        }
+        Ok(lowered) => {
+            if let Err(err) = gdsky_naga::to_wgsl(&lowered) {
+                panic!("{err}");
+            }
+            if let Err(err) = gdsky_naga::to_spirv(&lowered) {
+                panic!("{err}");
+            }
+        }
     }
 });

@@ -1,6 +1,7 @@
 //! Replays the fuzz corpus through the front end and, for every shader it accepts, through the
 //! lowering and naga's validator: the lowering may refuse what it does not translate yet
-//! (E600), but must never build a module naga rejects (E601).
+//! (E600), but must never build a module naga rejects (E601), and what it emits as WGSL and
+//! SPIR-V must read back through naga's front ends (E604).
 
 use gdshader::Loader;
 use std::path::Path;
@@ -18,7 +19,7 @@ impl Loader for SelfLoader {
 }
 
 #[test]
-fn every_accepted_corpus_shader_lowers_to_a_valid_module() {
+fn every_accepted_corpus_shader_lowers_and_reads_back() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fuzz/corpus/frontend");
     let mut accepted = 0;
     let mut failures = Vec::new();
@@ -31,14 +32,19 @@ fn every_accepted_corpus_shader_lowers_to_a_valid_module() {
             continue;
         }
         accepted += 1;
-        if let Err(diagnostics) = gdsky_naga::lower(&front)
-            && diagnostics.iter().any(|d| d.code == gdsky_naga::INVALID_MODULE)
-        {
-            failures.push(format!(
-                "{}:\n{}",
-                path.display(),
-                gdshader::diag::render_human(&front.db, &diagnostics, false)
-            ));
+        let render = |d: &[gdshader::Diagnostic]| gdshader::diag::render_human(&front.db, d, false);
+        match gdsky_naga::lower(&front) {
+            Err(diagnostics) => {
+                if diagnostics.iter().any(|d| d.code == gdsky_naga::INVALID_MODULE) {
+                    failures.push(format!("{}:\n{}", path.display(), render(&diagnostics)));
+                }
+            }
+            Ok(lowered) => {
+                let emitted = gdsky_naga::to_wgsl(&lowered).and_then(|_| gdsky_naga::to_spirv(&lowered));
+                if let Err(err) = emitted {
+                    failures.push(format!("{}:\n{}", path.display(), render(&[err.diagnostic(&front)])));
+                }
+            }
         }
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
