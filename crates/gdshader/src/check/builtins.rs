@@ -111,6 +111,9 @@ pub enum HintTarget {
     Sampler,
     /// Hints Godot knows but rejects in sky shaders.
     NotInSky,
+    /// `hint_screen_texture`: a sampler; Godot 4.6 accepts it in a sky shader, which has no
+    /// screen texture to read (a warning; reading it is an error).
+    ScreenTexture,
 }
 
 /// The uniform hints Godot knows (reference §3), with what each may be put on.
@@ -138,7 +141,7 @@ pub const HINTS: &[(&str, HintTarget)] = &[
     ("filter_linear_mipmap_anisotropic", HintTarget::Sampler),
     ("repeat_enable", HintTarget::Sampler),
     ("repeat_disable", HintTarget::Sampler),
-    ("hint_screen_texture", HintTarget::NotInSky),
+    ("hint_screen_texture", HintTarget::ScreenTexture),
     ("hint_depth_texture", HintTarget::NotInSky),
     ("hint_normal_roughness_texture", HintTarget::NotInSky),
     ("instance_index", HintTarget::NotInSky),

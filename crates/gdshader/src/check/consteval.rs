@@ -1,5 +1,14 @@
 //! Compile-time values: what `const` initializers, array sizes, `case` labels, hint arguments
-//! and uniform defaults evaluate to. Godot parses constants as doubles; so do we.
+//! and uniform defaults evaluate to.
+//!
+//! Floats are folded in double precision and rounded to single precision once, when the value
+//! becomes a literal of the shader, as GLSL compilers fold Godot's constant expressions; IEEE
+//! throughout (`1.0 / 0.0` is +inf, `0.0 / 0.0` NaN, a value past f32's range rounds to an
+//! infinity). Ints wrap (two's complement), and where GLSL leaves the result undefined,
+//! naga's run-time code decides: `x / 0 = x`, `x % 0 = 0`, `INT_MIN / -1 = INT_MIN`,
+//! `INT_MIN % -1 = 0`, a shift amount keeps its low 5 bits, and a float converts to an int by
+//! clamping to the range (NaN to 0). Whether Godot accepts an integer division by a constant zero
+//! is the checker's business (`codes::DIVISION_BY_ZERO`); the value is defined either way.
 
 use super::types::{Scalar, Type};
 use crate::parse::ast::{BinaryOp, UnaryOp};
@@ -62,14 +71,27 @@ impl ConstValue {
             Scalar::Float => ConstValue::Float(f),
             Scalar::Int => ConstValue::Int(match *self {
                 ConstValue::UInt(v) => v as u32 as i32 as i64,
-                _ => f.trunc() as i32 as i64,
+                ConstValue::Int(v) => v,
+                _ => float_to_i32(f as f32) as i64,
             }),
             Scalar::UInt => ConstValue::UInt(match *self {
                 ConstValue::Int(v) => v as i32 as u32 as u64,
-                _ => f.trunc() as u32 as u64,
+                ConstValue::UInt(v) => v,
+                _ => float_to_u32(f as f32) as u64,
             }),
         })
     }
+}
+
+/// A float converted to `int` as the translated shader does at run time (naga clamps to the
+/// range of ints representable in f32 before converting; NaN gives 0).
+pub fn float_to_i32(f: f32) -> i32 {
+    f.clamp(-2_147_483_648.0, 2_147_483_520.0) as i32
+}
+
+/// A float converted to `uint` (clamped to 0 ..= 4294967040, the largest f32 below 2³²).
+pub fn float_to_u32(f: f32) -> u32 {
+    f.clamp(0.0, 4_294_967_040.0) as u32
 }
 
 /// Writes a value the way the shader would: `1.5`, `vec3(0.68, 0.55, 0.48)`.
@@ -179,11 +201,12 @@ pub fn binary(op: BinaryOp, a: &ConstValue, b: &ConstValue, a_ty: &Type, b_ty: &
 
 fn float_op(op: BinaryOp, x: f64, y: f64) -> Option<ConstValue> {
     use BinaryOp::*;
+    let f = ConstValue::Float;
     Some(match op {
-        Add => ConstValue::Float(x + y),
-        Sub => ConstValue::Float(x - y),
-        Mul => ConstValue::Float(x * y),
-        Div => ConstValue::Float(x / y),
+        Add => f(x + y),
+        Sub => f(x - y),
+        Mul => f(x * y),
+        Div => f(x / y),
         Less => ConstValue::Bool(x < y),
         Greater => ConstValue::Bool(x > y),
         LessEq => ConstValue::Bool(x <= y),
@@ -200,8 +223,12 @@ fn int_op(op: BinaryOp, x: i64, y: i64) -> Option<ConstValue> {
         Add => int(x32.wrapping_add(y32)),
         Sub => int(x32.wrapping_sub(y32)),
         Mul => int(x32.wrapping_mul(y32)),
-        Div => x32.checked_div(y32).map(|v| ConstValue::Int(v as i64)),
-        Rem => x32.checked_rem(y32).map(|v| ConstValue::Int(v as i64)),
+        // naga's run-time code divides by 1 instead of 0 and of -1 under INT_MIN.
+        Div if y32 == 0 => int(x32),
+        Div => int(x32.wrapping_div(y32)),
+        Rem if y32 == 0 => int(0),
+        Rem => int(x32.wrapping_rem(y32)),
+        // `wrapping_shl` keeps the low 5 bits of the amount.
         Shl => int(x32.wrapping_shl(y as u32)),
         Shr => int(x32.wrapping_shr(y as u32)),
         BitAnd => int(x32 & y32),
@@ -223,8 +250,10 @@ fn uint_op(op: BinaryOp, x: u64, y: u64) -> Option<ConstValue> {
         Add => uint(x32.wrapping_add(y32)),
         Sub => uint(x32.wrapping_sub(y32)),
         Mul => uint(x32.wrapping_mul(y32)),
-        Div => x32.checked_div(y32).map(|v| ConstValue::UInt(v as u64)),
-        Rem => x32.checked_rem(y32).map(|v| ConstValue::UInt(v as u64)),
+        Div if y32 == 0 => uint(x32),
+        Div => uint(x32 / y32),
+        Rem if y32 == 0 => uint(0),
+        Rem => uint(x32 % y32),
         Shl => uint(x32.wrapping_shl(y32)),
         Shr => uint(x32.wrapping_shr(y32)),
         BitAnd => uint(x32 & y32),

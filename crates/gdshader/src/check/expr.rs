@@ -42,6 +42,20 @@ fn is_int_literal(e: &Expr) -> bool {
 
 const SWIZZLE_SETS: [&str; 3] = ["xyzw", "rgba", "stpq"];
 
+/// Whether Godot's `_eval_scalar` (servers/rendering/shader_language.cpp) refuses `_ / divisor`
+/// or `_ % divisor` with a result of type `ty`: an int or int-vector division or remainder by a
+/// zero component, a `uint` division by zero (Godot checks `uint` scalars only: a `uvec`
+/// division falls into its float branch), a `uint` or `uvec` remainder by zero.
+fn godot_divides_by_zero(op: BinaryOp, ty: &Type, divisor: &ConstValue) -> bool {
+    let zero = divisor.scalars().iter().any(|v| matches!(v, ConstValue::Int(0) | ConstValue::UInt(0)));
+    zero && match (op, ty) {
+        (BinaryOp::Div | BinaryOp::Rem, t) if t.scalar() == Some(Scalar::Int) => true,
+        (BinaryOp::Div, Type::Scalar(Scalar::UInt)) => true,
+        (BinaryOp::Rem, t) => t.scalar() == Some(Scalar::UInt),
+        _ => false,
+    }
+}
+
 impl Checker {
     /// Checks an expression and records its type.
     pub(super) fn expr(&mut self, e: &Expr) -> Option<ExprInfo> {
@@ -228,7 +242,27 @@ impl Checker {
         if let Some(g) = self.globals.get(&id.name) {
             return match g {
                 Global::Const { ty, value } => Some(ExprInfo::constant(ty.clone(), value.clone())),
-                Global::Uniform { ty } => Some(ExprInfo::runtime(ty.clone())),
+                Global::Uniform { ty, screen_texture } => {
+                    if *screen_texture {
+                        let ty = ty.clone();
+                        self.error(
+                            codes::SCREEN_TEXTURE_READ,
+                            format!("`{}` is a screen texture, which sky shaders cannot read", id.name),
+                            id.span,
+                            "read here",
+                        )
+                        .diagnostic
+                        .notes
+                        .push(
+                            "Godot 4.6 compiles a read of a `hint_screen_texture` uniform into its `color_buffer`, \
+                             which sky shaders do not declare, so the shader fails to compile \
+                             (\"'color_buffer' : undeclared identifier\"); Godot 4.7 refuses the hint in sky shaders"
+                                .into(),
+                        );
+                        return Some(ExprInfo::runtime(ty));
+                    }
+                    Some(ExprInfo::runtime(ty.clone()))
+                }
                 Global::Struct => {
                     self.error(
                         codes::TYPE_MISMATCH,
@@ -495,7 +529,26 @@ impl Checker {
         };
         let constant = a.constant && b.constant;
         let value = match (&a.value, &b.value) {
-            (Some(x), Some(y)) if constant => consteval::binary(op, x, y, &a.ty, &b.ty),
+            (Some(x), Some(y)) if constant => {
+                if self.op_eval && godot_divides_by_zero(op, &ty, y) {
+                    let what = if op == BinaryOp::Div { "Division" } else { "Modulo" };
+                    self.error(
+                        codes::DIVISION_BY_ZERO,
+                        format!("{what} by zero error."),
+                        e.span,
+                        "the divisor is zero",
+                    )
+                    .diagnostic
+                    .notes
+                    .push(
+                        "Godot evaluates constant integer operands here and refuses a zero divisor (only the \
+                             initializer of a non-`const` local variable is left to run time)"
+                            .into(),
+                    );
+                    return None;
+                }
+                consteval::binary(op, x, y, &a.ty, &b.ty)
+            }
             _ => None,
         };
         Some(ExprInfo { ty, constant, value })

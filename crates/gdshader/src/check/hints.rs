@@ -33,6 +33,7 @@ impl Checker {
                     matches!(elem, Type::Vector(Scalar::Float, 3 | 4) | Type::Sampler(..))
                 }
                 HintTarget::Sampler => matches!(elem, Type::Sampler(..)),
+                HintTarget::ScreenTexture => matches!(ty, Type::Sampler(..)),
                 HintTarget::NotInSky => {
                     self.error(
                         codes::BAD_HINT,
@@ -105,6 +106,17 @@ impl Checker {
                     Some(Vec::new())
                 }
             };
+            if target == HintTarget::ScreenTexture {
+                self.diags.push(
+                    crate::parse::SpannedDiagnostic::warning(
+                        codes::SCREEN_TEXTURE_IN_SKY,
+                        format!("`{}` has no screen texture to read in a sky shader", u.name.name),
+                        hint.name.span,
+                        "not available in sky shaders",
+                    )
+                    .note("Godot 4.6 accepts the declaration, but reading the uniform is an error"),
+                );
+            }
             if let Some(args) = args {
                 out.push(HintInfo { name: name.to_string(), args });
             }

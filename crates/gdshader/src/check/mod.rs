@@ -113,8 +113,15 @@ struct FnInfo {
 /// What a global name is.
 #[derive(Clone, Debug)]
 enum Global {
-    Const { ty: Type, value: Option<ConstValue> },
-    Uniform { ty: Type },
+    Const {
+        ty: Type,
+        value: Option<ConstValue>,
+    },
+    /// A uniform; `screen_texture` when it has `hint_screen_texture` (nothing to read in a sky).
+    Uniform {
+        ty: Type,
+        screen_texture: bool,
+    },
     Struct,
 }
 
@@ -163,6 +170,7 @@ pub fn check(shader: Shader) -> (CheckedShader, Vec<SpannedDiagnostic>) {
         render_modes: Vec::new(),
         has_sky: false,
         declarations: HashMap::new(),
+        op_eval: true,
     };
     c.items(&shader);
     let checked = CheckedShader {
@@ -197,6 +205,9 @@ struct Checker {
     render_modes: Vec<String>,
     has_sky: bool,
     declarations: HashMap<ast::Span, (Type, Option<ConstValue>)>,
+    /// Godot evaluates constant operators here (its `use_op_eval`): everywhere but in the
+    /// initializer of a non-`const` local variable.
+    op_eval: bool,
 }
 
 impl Checker {
@@ -602,7 +613,8 @@ impl Checker {
         let structs = self.struct_names();
         let default_text = default.as_ref().map(|v| ValueDisplay { value: v, ty: &ty, structs: &structs }.to_string());
         let type_name = self.type_name(&ty);
-        if self.declare_global(&u.name, Global::Uniform { ty: ty.clone() }) {
+        let screen_texture = hints.iter().any(|h| h.name == "hint_screen_texture");
+        if self.declare_global(&u.name, Global::Uniform { ty: ty.clone(), screen_texture }) {
             self.uniforms.push(UniformInfo {
                 name: u.name.name.clone(),
                 ty,

@@ -254,7 +254,11 @@ impl Checker {
             return None;
         }
         if let Some(init) = &d.init {
+            // Godot leaves the operators of this initializer to run time (`use_op_eval = is_const`
+            // in `_parse_block`): `int z = 5 / 0;` is accepted.
+            let saved = std::mem::replace(&mut self.op_eval, false);
             self.initializer(init, &t);
+            self.op_eval = saved;
         }
         Some(t)
     }

@@ -66,6 +66,10 @@ pub const BAD_ARRAY: &str = "E307";
 pub const BAD_SWITCH: &str = "E308";
 /// A call to something that is not a function.
 pub const NOT_CALLABLE: &str = "E309";
+/// An integer `/` or `%` by a constant zero where Godot evaluates the expression (a global
+/// constant, a local `const`, an array size, an expression statement): "Division by zero
+/// error." / "Modulo by zero error.".
+pub const DIVISION_BY_ZERO: &str = "E310";
 
 /// A function calls itself, directly or through others.
 pub const RECURSION: &str = "E400";
@@ -78,6 +82,9 @@ pub const BAD_HINT: &str = "E403";
 /// A declaration Godot does not allow in sky shaders (global variables, instance uniforms,
 /// sampler defaults, ...).
 pub const NOT_ALLOWED: &str = "E404";
+/// A read of a `hint_screen_texture` uniform in a sky shader: Godot 4.6 accepts the declaration
+/// but compiles the read into its `color_buffer`, which sky shaders do not have.
+pub const SCREEN_TEXTURE_READ: &str = "E405";
 
 /// Brackets or statements nested deeper than the compiler accepts.
 pub const NESTING_LIMIT: &str = "E500";
@@ -91,3 +98,6 @@ pub const NO_SKY_FUNCTION: &str = "W002";
 /// A `hint_range` Godot accepts but that cannot work as written (empty range, step ≤ 0,
 /// default outside the range).
 pub const SUSPICIOUS_HINT: &str = "W004";
+/// A `hint_screen_texture` uniform in a sky shader: accepted, but there is no screen texture to
+/// read, and reading it is an error ([`SCREEN_TEXTURE_READ`]).
+pub const SCREEN_TEXTURE_IN_SKY: &str = "W005";
