@@ -367,7 +367,11 @@ impl<'l, 'a> FnCtx<'l, 'a> {
         }
         if let Some(c) = self.lw.constants.get(&id.name).cloned() {
             return match c {
-                GlobalConst::Module(h) => Some(Val::Value(b.expr(E::Constant(h), sp))),
+                GlobalConst::Module(h, v) => Some(Val::Value(b.constant(h, v, sp))),
+                GlobalConst::Value(ty, value) => {
+                    let v = self.lw.const_value(&ty, &value)?;
+                    Some(Val::Value(b.value(&v, sp)))
+                }
                 GlobalConst::Inline(init) => self.lower(b, &init),
             };
         }
@@ -610,6 +614,17 @@ impl<'l, 'a> FnCtx<'l, 'a> {
                 // naga wants an unsigned shift amount of the left side's shape.
                 if rt.scalar() == Some(GdScalar::Int) {
                     r = b.expr(E::As { expr: r, kind: ScalarKind::Uint, convert: Some(4) }, sp);
+                }
+                if b.known(r).is_none() {
+                    // GLSL leaves a shift by 32 or more (or by a negative amount) undefined, and
+                    // so does SPIR-V: keep the amount's low 5 bits, as a constant amount is
+                    // folded (the builder masks those).
+                    let mask = b.expr(E::Literal(Literal::U32(31)), sp);
+                    let mask = match rt {
+                        GdType::Vector(_, n) => b.expr(E::Splat { size: vector_size(*n), value: mask }, sp),
+                        _ => mask,
+                    };
+                    r = b.expr(E::Binary { op: Bo::And, left: r, right: mask }, sp);
                 }
                 if let (GdType::Vector(..), GdType::Scalar(_)) = (lt, rt) {
                     r = splat_to(b, r, lt);

@@ -16,6 +16,7 @@
 mod builder;
 mod calls;
 mod expr;
+mod fold;
 mod stmt;
 
 pub(crate) use builder::FnBuilder;
@@ -80,8 +81,11 @@ pub struct TextureSlot {
 /// A global `const`.
 #[derive(Clone)]
 enum GlobalConst {
-    /// Folded by the checker into a module constant.
-    Module(Handle<Constant>),
+    /// Folded by the checker into a module constant, of this value.
+    Module(Handle<Constant>, fold::Value),
+    /// Folded by the checker, but not a value a naga constant can hold (an infinity or a NaN):
+    /// written at each use, where the builder makes what is not finite a run-time value.
+    Value(GdType, ConstValue),
     /// Not foldable here (e.g. `sin(1.0)`): its initializer is lowered at each use.
     Inline(Box<ast::Expr>),
 }
@@ -311,11 +315,14 @@ impl<'a> Lowerer<'a> {
             let at = self.uniform_span(&u.name);
             if let Some(value) = self.baked.get(&u.name).cloned() {
                 // A baked uniform is a constant: the compiler folds it, and it leaves the block.
-                if let (Some(th), Some(init)) = (self.ty(&u.ty, at), self.const_expr(&u.ty, &value, at)) {
-                    let c =
-                        self.module.constants.append(Constant { name: Some(u.name.clone()), ty: th, init }, span(at));
-                    self.constants.insert(u.name.clone(), GlobalConst::Module(c));
+                if let Some(c) = self.module_constant(&u.name, &u.ty, &value, at) {
+                    self.constants.insert(u.name.clone(), c);
                 }
+                continue;
+            }
+            if u.hints.iter().any(|h| h.name == "hint_screen_texture") {
+                // A sky has no screen texture: the checker refuses any read of it (E405), and an
+                // unread one needs no binding.
                 continue;
             }
             match &u.ty {
@@ -469,29 +476,76 @@ impl<'a> Lowerer<'a> {
     fn global_const(&mut self, d: &ast::Declarator) {
         let Some(init) = &d.init else { return };
         let lowered = match self.shader.declarations.get(&d.name.span).cloned() {
-            Some((ty, Some(value))) => {
-                let Some(th) = self.ty(&ty, d.name.span) else {
-                    return;
-                };
-                match self.const_expr(&ty, &value, d.name.span) {
-                    Some(init_h) => {
-                        let c = self
-                            .module
-                            .constants
-                            .append(Constant { name: Some(d.name.name.clone()), ty: th, init: init_h }, span(d.span));
-                        GlobalConst::Module(c)
-                    }
-                    None => GlobalConst::Inline(Box::new(init.clone())),
-                }
-            }
-            _ => GlobalConst::Inline(Box::new(init.clone())),
+            Some((ty, Some(value))) => self.module_constant(&d.name.name, &ty, &value, d.name.span),
+            _ => None,
         };
+        let lowered = lowered.unwrap_or_else(|| GlobalConst::Inline(Box::new(init.clone())));
         self.constants.insert(d.name.name.clone(), lowered);
+    }
+
+    /// A folded constant as a module constant, or, when a naga constant cannot hold its value
+    /// (it is not finite), as a value written at each use.
+    fn module_constant(&mut self, name: &str, ty: &GdType, value: &ConstValue, at: ast::Span) -> Option<GlobalConst> {
+        let th = self.ty(ty, at)?;
+        let folded = self.const_value(ty, value);
+        match (self.const_expr(ty, value, at), folded) {
+            (Some(init), Some(v)) => {
+                let c = self.module.constants.append(Constant { name: Some(name.into()), ty: th, init }, span(at));
+                Some(GlobalConst::Module(c, v))
+            }
+            (None, Some(_)) => Some(GlobalConst::Value(ty.clone(), value.clone())),
+            _ => None,
+        }
+    }
+
+    /// The types the builder folds with: every scalar, vector and matrix type.
+    pub(crate) fn type_table(&mut self) -> Option<fold::TypeTable> {
+        let at = ast::Span::default();
+        let kinds = [GdScalar::Bool, GdScalar::Int, GdScalar::UInt, GdScalar::Float];
+        let mut scalars = Vec::new();
+        let mut vectors = Vec::new();
+        for s in kinds {
+            scalars.push(self.ty(&GdType::Scalar(s), at)?);
+            let row = [
+                self.ty(&GdType::Vector(s, 2), at)?,
+                self.ty(&GdType::Vector(s, 3), at)?,
+                self.ty(&GdType::Vector(s, 4), at)?,
+            ];
+            vectors.push(row);
+        }
+        let matrices =
+            [self.ty(&GdType::Matrix(2), at)?, self.ty(&GdType::Matrix(3), at)?, self.ty(&GdType::Matrix(4), at)?];
+        Some(fold::TypeTable { scalars: scalars.try_into().ok()?, vectors: vectors.try_into().ok()?, matrices })
+    }
+
+    /// A constant value of type `ty` as the folder's value (finite or not).
+    pub(crate) fn const_value(&mut self, ty: &GdType, value: &ConstValue) -> Option<fold::Value> {
+        Some(match (ty, value) {
+            (GdType::Scalar(s), v) => fold::Value::Scalar(literal(*s, v)?),
+            (GdType::Vector(s, n), ConstValue::Composite(items)) if items.len() == usize::from(*n) => {
+                fold::Value::Vector(items.iter().map(|i| literal(*s, i)).collect::<Option<_>>()?)
+            }
+            (GdType::Matrix(n), ConstValue::Composite(items)) => {
+                let n = usize::from(*n);
+                let scalars = value.scalars();
+                if scalars.len() != n * n || items.is_empty() {
+                    return None;
+                }
+                let lits: Vec<Literal> = scalars.iter().map(|v| literal(GdScalar::Float, v)).collect::<Option<_>>()?;
+                fold::Value::Matrix(lits.chunks(n).map(<[Literal]>::to_vec).collect())
+            }
+            (GdType::Array(elem, n), ConstValue::Composite(items)) if items.len() == *n as usize => {
+                let th = self.ty(ty, ast::Span::default())?;
+                let items = items.iter().map(|i| self.const_value(elem, i)).collect::<Option<_>>()?;
+                fold::Value::Other(th, items)
+            }
+            _ => return None,
+        })
     }
 
     /// The literal value of a folded scalar global constant.
     pub fn constant_literal(&self, name: &str) -> Option<Literal> {
-        let GlobalConst::Module(c) = self.constants.get(name)? else {
+        let GlobalConst::Module(c, _) = self.constants.get(name)? else {
             return None;
         };
         match self.module.global_expressions[self.module.constants[*c].init] {
@@ -500,19 +554,21 @@ impl<'a> Lowerer<'a> {
         }
     }
 
-    /// A constant value as a global const-expression.
+    /// A constant value as a global const-expression; `None` when a literal would not be finite
+    /// (naga's literals cannot hold an infinity or a NaN).
     fn const_expr(&mut self, ty: &GdType, value: &ConstValue, at: ast::Span) -> Option<Handle<Expression>> {
         let sp = span(at);
+        let finite = |l: Literal| if matches!(l, Literal::F32(f) if !f.is_finite()) { None } else { Some(l) };
         let h = match (ty, value) {
             (GdType::Scalar(s), v) => {
-                let lit = literal(*s, v)?;
+                let lit = finite(literal(*s, v)?)?;
                 self.module.global_expressions.append(Expression::Literal(lit), sp)
             }
             (GdType::Vector(s, n), ConstValue::Composite(items)) if items.len() == *n as usize => {
                 let th = self.ty(ty, at)?;
                 let mut components = Vec::new();
                 for item in items {
-                    let lit = literal(*s, item)?;
+                    let lit = finite(literal(*s, item)?)?;
                     components.push(self.module.global_expressions.append(Expression::Literal(lit), sp));
                 }
                 self.module.global_expressions.append(Expression::Compose { ty: th, components }, sp)
@@ -545,7 +601,10 @@ impl<'a> Lowerer<'a> {
             self.error(f.name.span, "internal: a parameter of this function has no recorded type");
             return;
         }
-        let mut b = FnBuilder::new(&f.name.name);
+        let mut b = match self.type_table() {
+            Some(types) => FnBuilder::with_types(&f.name.name, types),
+            None => FnBuilder::new(&f.name.name),
+        };
         for (p, (ty, q)) in f.params.iter().zip(&params) {
             if let GdType::Sampler(kind, scalar) = ty {
                 // A sampler parameter is two arguments: the texture and its sampler.

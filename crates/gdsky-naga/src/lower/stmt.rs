@@ -12,11 +12,16 @@ use gdshader::parse::ast::{self, Stmt, StmtKind};
 use naga::{Block, Expression as E, Statement, SwitchCase, SwitchValue, UnaryOperator};
 
 impl FnCtx<'_, '_> {
-    /// Lowers statements in a new scope.
+    /// Lowers statements in a new scope. Statements after a `return`, `break`, `continue` or
+    /// `discard` can never run; they are left out (no statement follows a terminator in a naga
+    /// block).
     pub fn block(&mut self, b: &mut FnBuilder, stmts: &[Stmt]) {
         self.push_scope();
         for s in stmts {
             self.stmt(b, s);
+            if matches!(s.kind, StmtKind::Return(_) | StmtKind::Break | StmtKind::Continue | StmtKind::Discard) {
+                break;
+            }
         }
         self.pop_scope();
     }
