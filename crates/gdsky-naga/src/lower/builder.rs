@@ -25,6 +25,9 @@ pub(crate) struct FnBuilder {
     types: Option<TypeTable>,
     /// The value of each constant expression built so far, by handle index.
     known: Vec<Option<Value>>,
+    /// The handles (by index) that are run-time copies of constants: naga sees a run-time value,
+    /// the folder still knows it (an infinity, a NaN), so what is computed from it is folded too.
+    runtime_copies: std::collections::HashSet<usize>,
     /// Local variables holding the bits of run-time copies of constants, by literal.
     runtime_vars: HashMap<(u8, u32), Handle<LocalVariable>>,
 }
@@ -37,6 +40,7 @@ impl FnBuilder {
             emit_start: None,
             types: None,
             known: Vec::new(),
+            runtime_copies: std::collections::HashSet::new(),
             runtime_vars: HashMap::new(),
         }
     }
@@ -48,6 +52,9 @@ impl FnBuilder {
 
     /// The value of `h` when it is a constant naga evaluates.
     pub fn known(&self, h: Handle<Expression>) -> Option<&Value> {
+        if self.runtime_copies.contains(&h.index()) {
+            return None;
+        }
         self.known.get(h.index()).and_then(Option::as_ref)
     }
 
@@ -75,8 +82,14 @@ impl FnBuilder {
             let known = &self.known;
             fold::evaluate(&expr, &|h: Handle<Expression>| known.get(h.index()).cloned().flatten(), &types)
         };
+        // An expression computed from a run-time copy of a constant is a constant too (GLSL's
+        // compilers fold it); naga would leave it to run time, where a driver need not keep an
+        // infinity or a NaN: it is written as its value.
+        let from_copy = fold::operands(&expr).iter().any(|h| self.runtime_copies.contains(&h.index()));
         match outcome {
             Fold::Runtime => self.append(expr, span),
+            Fold::Keep(v) | Fold::Replace(v) if from_copy => self.value(&v, span),
+            Fold::Opaque(_) if from_copy => self.append(expr, span),
             Fold::Keep(v) => {
                 let h = self.append(expr, span);
                 self.record(h, Some(v));
@@ -112,7 +125,10 @@ impl FnBuilder {
             return self.append(Expression::Literal(Literal::Bool(false)), span);
         };
         if !v.is_finite() {
-            return self.runtime_value(v, &types, &|_| false, span);
+            let h = self.runtime_value(v, &types, &|_| false, span);
+            self.record(h, Some(v.clone()));
+            self.runtime_copies.insert(h.index());
+            return h;
         }
         let h = match v {
             Value::Scalar(l) => self.append(Expression::Literal(*l), span),

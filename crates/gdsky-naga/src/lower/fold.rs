@@ -63,7 +63,8 @@ impl TypeTable {
     }
 }
 
-/// A constant value (always finite: a non-finite value is a run-time value in the module).
+/// A constant value (a value that is not finite is a run-time value in the module, see
+/// `FnBuilder`).
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) enum Value {
     Scalar(Literal),
@@ -544,8 +545,9 @@ fn relational(fun: RelationalFunction, v: &Value) -> Option<Value> {
             Value::Scalar(Literal::Bool(bools().collect::<Option<Vec<_>>>()?.iter().any(|b| *b)))
         }
         RelationalFunction::IsNan | RelationalFunction::IsInf => {
-            // Known values are finite.
-            let out: Vec<Literal> = lanes.iter().map(|_| Literal::Bool(false)).collect();
+            let test = |f: f32| if fun == RelationalFunction::IsNan { f.is_nan() } else { f.is_infinite() };
+            let out: Vec<Literal> =
+                lanes.iter().map(|l| Literal::Bool(matches!(l, Literal::F32(f) if test(*f)))).collect();
             if matches!(v, Value::Scalar(_)) { Value::Scalar(out[0]) } else { Value::Vector(out) }
         }
     })
