@@ -15,10 +15,12 @@
 //! error is reported at the user's file and line ([`lower`] maps it through the source map);
 //! code the wrapper injects carries no span and is reported as the wrapper's.
 
+mod emit;
 mod lower;
 pub mod reflect;
 pub mod wrapper;
 
+pub use emit::{EmitError, reread_wgsl, to_spirv, to_wgsl};
 pub use lower::{GLOBAL_UNIFORM_GROUP, MATERIAL_GROUP, TextureSlot, UniformSlot};
 pub use wrapper::Projection;
 
@@ -157,155 +159,4 @@ fn validation_diagnostic(front: &FrontendOutput, err: &naga::WithSpan<naga::vali
         d.notes.push("the problem is in code gdsky's sky wrapper adds, which has no place in the shader".into());
     }
     d
-}
-
-/// Why an emitted module was refused: a back end failed, or what it wrote does not read back.
-///
-/// Every text gdsky emits is re-read by naga's own front end and validated before anyone sees
-/// it ([`to_wgsl`], [`to_spirv`]): naga's IR validator is more lenient than the WGSL language
-/// (its constant evaluator, its return rules), so a module can validate and still print as WGSL
-/// that no WGSL compiler accepts. Such a module is a gdsky bug and must never reach a file.
-#[derive(Clone, Debug)]
-pub struct EmitError {
-    /// `"WGSL"` or `"SPIR-V"`.
-    pub format: &'static str,
-    /// What failed, in naga's words (for a re-read: the emitted line with a caret).
-    pub message: String,
-    /// The back end wrote the module but naga's front end could not read it back or validate it
-    /// (otherwise the back end itself failed).
-    pub reread: bool,
-    /// The function of the module the failure is in, when it could be found: its span points at
-    /// the function in the user's shader (none for the wrapper's entry points).
-    span: Option<naga::Span>,
-    /// The function's name in the emitted text.
-    function: Option<String>,
-}
-
-impl std::fmt::Display for EmitError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{}: {}", self.format, self.message)
-    }
-}
-
-impl std::error::Error for EmitError {}
-
-impl EmitError {
-    /// The failure as a diagnostic at the user's function (code [`BACKEND`] or [`REREAD`]).
-    pub fn diagnostic(&self, front: &FrontendOutput) -> Diagnostic {
-        let code = if self.reread { REREAD } else { BACKEND };
-        let mut d = Diagnostic::error(code, format!("gdsky emitted {} that does not hold up", self.format))
-            .with_note(self.message.clone())
-            .with_note(
-                "this is a bug in gdsky's translation, not in the shader; nothing was written; please report it",
-            );
-        match (self.span.and_then(|s| s.to_range()), &self.function) {
-            (Some(range), Some(name)) => {
-                let (file, range) = front.locate(ast::Span::new(range.start, range.end));
-                d.labels.push(gdshader::Label {
-                    file,
-                    range,
-                    message: format!("in this function (`{name}` in the emitted text)"),
-                    primary: true,
-                });
-            }
-            (None, Some(name)) => {
-                d.notes.push(format!("the problem is in `{name}`, code gdsky's sky wrapper adds"));
-            }
-            _ => {}
-        }
-        d
-    }
-}
-
-/// Writes the module as WGSL, then re-reads that text with naga's WGSL front end and validates
-/// the result: only text that round-trips comes back.
-pub fn to_wgsl(lowered: &Lowered) -> Result<String, EmitError> {
-    let text = naga::back::wgsl::write_string(&lowered.module, &lowered.info, naga::back::wgsl::WriterFlags::empty())
-        .map_err(|e| EmitError {
-        format: "WGSL",
-        message: format!("naga's WGSL writer failed: {e}"),
-        reread: false,
-        span: None,
-        function: None,
-    })?;
-    reread_wgsl(&lowered.module, &text)?;
-    Ok(text)
-}
-
-/// Re-reads emitted WGSL with naga's front end and validator; an error names the function of
-/// `module` whose text holds the offending line.
-pub fn reread_wgsl(module: &naga::Module, text: &str) -> Result<(), EmitError> {
-    let fail = |message: String, offset: Option<usize>| {
-        let function = offset.and_then(|o| enclosing_wgsl_function(text, o));
-        let span = function.as_deref().and_then(|name| function_span(module, name));
-        EmitError { format: "WGSL", message, reread: true, span, function }
-    };
-    let reread = naga::front::wgsl::parse_str(text).map_err(|e| {
-        let offset = e.location(text).map(|l| l.offset as usize);
-        fail(format!("the emitted WGSL does not re-read: {}", e.emit_to_string_with_path(text, "emitted.wgsl")), offset)
-    })?;
-    validator().validate(&reread).map_err(|e| {
-        let offset = e.spans().next().and_then(|(s, _)| s.to_range()).map(|r| r.start);
-        fail(
-            format!("the re-read WGSL does not validate: {}", e.emit_to_string_with_path(text, "emitted.wgsl")),
-            offset,
-        )
-    })?;
-    Ok(())
-}
-
-/// Writes the module as SPIR-V 1.3 for Vulkan, every entry point in one module, then re-reads it
-/// with naga's SPIR-V front end and validates the result. The vertex position is written in
-/// Vulkan's clip space as wgpu expects (naga's default adjustment).
-pub fn to_spirv(lowered: &Lowered) -> Result<Vec<u32>, EmitError> {
-    let fail = |message: String, reread| EmitError { format: "SPIR-V", message, reread, span: None, function: None };
-    let options = naga::back::spv::Options { lang_version: (1, 3), fake_missing_bindings: true, ..Default::default() };
-    let words = naga::back::spv::write_vec(&lowered.module, &lowered.info, &options, None)
-        .map_err(|e| fail(format!("naga's SPIR-V writer failed: {e}"), false))?;
-    let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
-    let reread = naga::front::spv::parse_u8_slice(&bytes, &naga::front::spv::Options::default())
-        .map_err(|e| fail(format!("the emitted SPIR-V does not re-read with naga's SPIR-V front end: {e}"), true))?;
-    validator()
-        .validate(&reread)
-        .map_err(|e| fail(format!("the re-read SPIR-V does not validate: {}", error_chain(e.as_inner())), true))?;
-    Ok(words)
-}
-
-/// An error and its sources on one line.
-fn error_chain(err: &dyn std::error::Error) -> String {
-    let mut text = err.to_string();
-    let mut source = err.source();
-    while let Some(s) = source {
-        text.push_str(": ");
-        text.push_str(&s.to_string());
-        source = s.source();
-    }
-    text
-}
-
-/// The name of the WGSL function whose text holds byte `offset` of `text`: the last `fn NAME(`
-/// at the start of a line that starts at or before it.
-fn enclosing_wgsl_function(text: &str, offset: usize) -> Option<String> {
-    // `+ 3`: an offset at the `f` of `fn` itself (naga's span of a whole function) counts.
-    let mut end = (offset + 3).min(text.len());
-    while !text.is_char_boundary(end) {
-        end -= 1;
-    }
-    let before = &text[..end];
-    let start = before.rfind("\nfn ").map(|i| i + 4).or_else(|| before.starts_with("fn ").then_some(3))?;
-    let rest = &text[start..];
-    let name: String = rest.chars().take_while(|c| c.is_alphanumeric() || *c == '_').collect();
-    (!name.is_empty()).then_some(name)
-}
-
-/// The span of the module function (or entry point) that naga's WGSL writer names `name`: the
-/// writer keeps a function's own name unless it clashes, when it appends `_N`.
-fn function_span(module: &naga::Module, name: &str) -> Option<naga::Span> {
-    let base = name.rsplit_once('_').filter(|(_, n)| n.chars().all(|c| c.is_ascii_digit())).map(|(b, _)| b);
-    let matches = |f: &Option<String>| f.as_deref() == Some(name) || (base.is_some() && f.as_deref() == base);
-    let span =
-        module.functions.iter().find(|(_, f)| matches(&f.name)).map(|(h, _)| module.functions.get_span(h)).or_else(
-            || module.entry_points.iter().find(|e| matches(&e.function.name)).map(|_| naga::Span::UNDEFINED),
-        )?;
-    span.is_defined().then_some(span)
 }
