@@ -100,7 +100,9 @@ pub fn compile_into(shader: &Path, out_dir: &Path) -> Result<Compiled, BuildErro
         (&compiled.reflection, json.as_bytes()),
         (&compiled.rust, rust.as_bytes()),
     ] {
-        std::fs::write(path, bytes).map_err(|e| BuildError::Io(path.clone(), e))?;
+        // The one safe writer: atomic (cargo never sees a half-written file), through a symbolic
+        // link to its target, never over a directory or special file.
+        skyrun::safe_io::write_atomically(path, bytes).map_err(|e| BuildError::Io(path.clone(), e))?;
     }
     Ok(compiled)
 }

@@ -12,7 +12,8 @@ pub struct ConvertArgs {
     /// The sky shader (`.gdshader`) to convert.
     #[arg(value_name = "FILE")]
     file: PathBuf,
-    /// Directory to write `<stem>.wgsl`, `<stem>.spv` and `<stem>.json` into (created if missing).
+    /// Directory to write `<stem>.wgsl`, `<stem>.spv` and `<stem>.json` into (created if missing;
+    /// checked before converting).
     #[arg(short = 'o', long = "out-dir", value_name = "DIR", default_value = ".")]
     out_dir: PathBuf,
     /// Bake a uniform into the shader as a constant: `--set view_samples=16`,
@@ -30,6 +31,13 @@ pub fn run(args: &ConvertArgs) -> ExitCode {
             return ExitCode::from(1);
         };
         baked.insert(name.trim().to_string(), value.trim().to_string());
+    }
+    // Where the outputs go is checked before any work: -o DIR is created when missing (from its
+    // nearest existing ancestor), and none of the three files may be a directory or special file.
+    let stem = args.file.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "shader".into());
+    let names = ["wgsl", "spv", "json"].map(|ext| format!("{stem}.{ext}"));
+    if let Err(code) = super::check_output_dir(&args.out_dir, true, &names.each_ref().map(String::as_str)) {
+        return code;
     }
     let front = match gdsky::check_file(&args.file) {
         Ok(f) => f,
@@ -49,7 +57,6 @@ pub fn run(args: &ConvertArgs) -> ExitCode {
             return ExitCode::from(1);
         }
     };
-    let stem = args.file.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "shader".into());
     let wgsl = match gdsky_naga::to_wgsl(&lowered) {
         Ok(w) => w,
         Err(err) => {
@@ -72,15 +79,13 @@ pub fn run(args: &ConvertArgs) -> ExitCode {
             return ExitCode::from(1);
         }
     };
-    if let Err(err) = std::fs::create_dir_all(&args.out_dir) {
-        eprintln!("error: cannot create {}: {err}", args.out_dir.display());
-        return ExitCode::from(2);
+    if let Err(code) = super::create_output_dir(&args.out_dir) {
+        return code;
     }
-    for (ext, bytes) in [("wgsl", wgsl.as_bytes()), ("spv", spirv.as_slice()), ("json", json.as_bytes())] {
-        let path = args.out_dir.join(format!("{stem}.{ext}"));
-        if let Err(err) = super::write_atomically(&path, bytes) {
-            eprintln!("error: cannot write {}: {err}", path.display());
-            return ExitCode::from(2);
+    for (name, bytes) in names.iter().zip([wgsl.as_bytes(), spirv.as_slice(), json.as_bytes()]) {
+        let path = args.out_dir.join(name);
+        if let Err(message) = super::write_file(&path, bytes) {
+            return super::environment(message);
         }
         println!("wrote {} ({} bytes)", path.display(), bytes.len());
     }

@@ -20,7 +20,7 @@ const FLOOR: f32 = 1e-4;
 
 #[derive(Args)]
 pub struct DemoArgs {
-    /// Folder to write the outputs into (created if missing).
+    /// Folder to write the outputs into (created if missing; checked before any work).
     #[arg(short = 'o', long = "out-dir", value_name = "DIR", default_value = "out")]
     out_dir: PathBuf,
 }
@@ -42,13 +42,6 @@ pub fn run(args: &DemoArgs) -> ExitCode {
 }
 
 fn demo(out: &Path) -> Result<(), ExitCode> {
-    let io_error = |what: String| {
-        move |err: std::io::Error| {
-            eprintln!("error: cannot write {what}: {err}");
-            ExitCode::from(2)
-        }
-    };
-    std::fs::create_dir_all(out).map_err(io_error(out.display().to_string()))?;
     let sun = Scene {
         sun_elevation_deg: 10.0,
         sun_azimuth_deg: 30.0,
@@ -65,6 +58,16 @@ fn demo(out: &Path) -> Result<(), ExitCode> {
             scene: Scene { fov_deg: 60.0, yaw_deg: -30.0, pitch_deg: 8.0, ..sun },
         },
     ];
+    // Every output is checked before any work: the folder exists or can be created, and no file
+    // in it that the demo writes is a directory or a special file.
+    let mut names: Vec<String> = ["wgsl", "spv", "json"].iter().map(|ext| format!("freeman_sky.{ext}")).collect();
+    for view in &views {
+        for suffix in [".exr", ".reference.exr", ".png", ".heatmap.png"] {
+            names.push(format!("{}{suffix}", view.name));
+        }
+    }
+    names.push("demo.png".into());
+    super::check_output_dir(out, true, &names.iter().map(String::as_str).collect::<Vec<_>>())?;
     let progress = ProgressBar::new(2 + 4 * views.len() as u64);
     progress.set_style(
         ProgressStyle::with_template("{spinner} [{bar:30}] {pos}/{len} {msg}")
@@ -86,9 +89,10 @@ fn demo(out: &Path) -> Result<(), ExitCode> {
     let reflection = gdsky_naga::reflect::reflection("freeman_sky", shader_info, lowered, &Default::default());
     let json = serde_json::to_string_pretty(&reflection).unwrap_or_default() + "\n";
     let spirv_bytes: Vec<u8> = spirv.iter().flat_map(|w| w.to_le_bytes()).collect();
+    progress.suspend(|| super::create_output_dir(out))?;
     for (ext, bytes) in [("wgsl", wgsl.as_bytes()), ("spv", spirv_bytes.as_slice()), ("json", json.as_bytes())] {
         let path = out.join(format!("freeman_sky.{ext}"));
-        super::write_atomically(&path, bytes).map_err(io_error(path.display().to_string()))?;
+        super::write_file(&path, bytes).map_err(|message| progress.suspend(|| super::environment(message)))?;
     }
     progress.inc(1);
 

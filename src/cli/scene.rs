@@ -35,29 +35,32 @@ pub struct SceneArgs {
     /// has].
     #[arg(long, value_enum)]
     pub projection: Option<ProjectionArg>,
-    /// Image size WxH in pixels (a cubemap: the size of one face, which must be square).
+    /// Image size WxH in pixels (a cubemap: the size of one face, which must be square). Each
+    /// side 1 to 8192, at most 16,777,216 pixels (4096x4096, 8192x2048): the renderer's limits.
     #[arg(long, value_name = "WxH", default_value = "256x128", value_parser = parse_size)]
     pub size: (u32, u32),
-    /// The sun (LIGHT0): elevation and azimuth in degrees. Azimuth 0 is toward −Z, 90 toward +X.
-    #[arg(long, value_name = "ELEV,AZIM", default_value = "10,0", value_parser = parse_pair, allow_hyphen_values = true)]
+    /// The sun (LIGHT0): elevation (−90 to 90) and azimuth (−360 to 360) in degrees. Azimuth 0
+    /// is toward −Z, 90 toward +X.
+    #[arg(long, value_name = "ELEV,AZIM", default_value = "10,0", value_parser = parse_sun, allow_hyphen_values = true)]
     pub sun: (f64, f64),
     /// Turn LIGHT0 off (LIGHT0_ENABLED = false).
     #[arg(long)]
     pub no_light: bool,
-    /// Camera POSITION in metres (the Freeman sky uses the height .y, clamped to at least 0.5 m).
-    #[arg(long, value_name = "X,Y,Z", default_value = "0,1,0", value_parser = parse_triple, allow_hyphen_values = true)]
+    /// Camera POSITION in metres, each coordinate finite in f32 (the Freeman sky uses the height
+    /// .y, clamped to at least 0.5 m).
+    #[arg(long, value_name = "X,Y,Z", default_value = "0,1,0", value_parser = parse_position, allow_hyphen_values = true)]
     pub position: (f64, f64, f64),
-    /// TIME in seconds.
-    #[arg(long, value_name = "T", default_value_t = 0.0, allow_hyphen_values = true)]
+    /// TIME in seconds, finite in f32.
+    #[arg(long, value_name = "T", default_value = "0", value_parser = parse_time, allow_hyphen_values = true)]
     pub time: f32,
-    /// Camera: vertical field of view in degrees.
-    #[arg(long, value_name = "DEG", default_value_t = 90.0)]
+    /// Camera: vertical field of view in degrees, more than 0 and less than 180.
+    #[arg(long, value_name = "DEG", default_value = "90", value_parser = parse_fov, allow_hyphen_values = true)]
     pub fov: f64,
-    /// Camera: yaw in degrees (rotation about +Y; 90 turns the view from −Z to −X).
-    #[arg(long, value_name = "DEG", default_value_t = 0.0, allow_hyphen_values = true)]
+    /// Camera: yaw in degrees, −360 to 360 (rotation about +Y; 90 turns the view from −Z to −X).
+    #[arg(long, value_name = "DEG", default_value = "0", value_parser = parse_yaw, allow_hyphen_values = true)]
     pub yaw: f64,
-    /// Camera: pitch in degrees (rotation about +X; 90 looks straight up).
-    #[arg(long, value_name = "DEG", default_value_t = 0.0, allow_hyphen_values = true)]
+    /// Camera: pitch in degrees, −90 to 90 (rotation about +X; 90 looks straight up).
+    #[arg(long, value_name = "DEG", default_value = "0", value_parser = parse_pitch, allow_hyphen_values = true)]
     pub pitch: f64,
     /// Set a uniform for this render: `--set view_samples=16`, `--set ground_color=0.1,0.1,0.1`.
     /// Uniforms not set keep the shader's defaults.
@@ -95,45 +98,154 @@ impl SceneArgs {
         let (w, h) = self.size;
         match self.projection.unwrap_or(ProjectionArg::Panorama) {
             ProjectionArg::Panorama => Ok((vec![Projection::Panorama], w, h)),
-            ProjectionArg::Camera => {
-                if !(self.fov > 0.0 && self.fov < 180.0) {
-                    return Err(format!("--fov {} must be between 0 and 180 degrees", self.fov));
-                }
-                Ok((vec![Projection::Camera], w, h))
-            }
+            ProjectionArg::Camera => Ok((vec![Projection::Camera], w, h)),
             ProjectionArg::Cubemap if w == h => Ok(((0..6).map(Projection::CubeFace).collect(), w, h)),
             ProjectionArg::Cubemap => Err(format!("a cubemap face must be square, not {w}x{h}")),
         }
     }
 }
 
-fn parse_size(s: &str) -> Result<(u32, u32), String> {
+/// The range a number given on the command line must lie in, and the words for it.
+#[derive(Clone, Copy, Debug)]
+pub struct Range {
+    /// Lowest accepted value.
+    pub min: f64,
+    /// Highest accepted value.
+    pub max: f64,
+    /// `min` itself is refused (the range is open there).
+    pub min_open: bool,
+    /// `max` itself is refused.
+    pub max_open: bool,
+    /// How the accepted range reads in a message: `−90 to 90 degrees`.
+    pub text: &'static str,
+}
+
+impl Range {
+    /// A closed range `[min, max]`.
+    pub const fn closed(min: f64, max: f64, text: &'static str) -> Self {
+        Self { min, max, min_open: false, max_open: false, text }
+    }
+
+    /// Any value that rounds to a finite f32.
+    pub const fn f32_finite(text: &'static str) -> Self {
+        Self { min: -F32_LIMIT, max: F32_LIMIT, min_open: true, max_open: true, text }
+    }
+
+    fn contains(&self, v: f64) -> bool {
+        let above = if self.min_open { v > self.min } else { v >= self.min };
+        let below = if self.max_open { v < self.max } else { v <= self.max };
+        above && below
+    }
+}
+
+/// Where f64 values stop rounding to a finite f32 (exclusive): `f32::MAX` plus half its ulp.
+/// Values travel to the GPU as f32, and one at or beyond this would arrive as infinity; below
+/// it they round to at most `f32::MAX` (3.4028235e38, which is itself accepted).
+pub const F32_LIMIT: f64 = f32::MAX as f64 + (1u128 << 103) as f64;
+
+/// The sun's elevation: from straight down to straight up.
+pub const SUN_ELEVATION: Range = Range::closed(-90.0, 90.0, "−90 to 90 degrees");
+/// Angles around the vertical (the sun's azimuth, the camera's yaw): one turn either way.
+pub const TURN: Range = Range::closed(-360.0, 360.0, "−360 to 360 degrees");
+/// The camera's pitch: from straight down to straight up.
+pub const PITCH: Range = Range::closed(-90.0, 90.0, "−90 to 90 degrees");
+/// The camera's vertical field of view.
+pub const FOV: Range =
+    Range { min: 0.0, max: 180.0, min_open: true, max_open: true, text: "more than 0 and less than 180 degrees" };
+/// A coordinate of the camera's position, in metres.
+pub const POSITION: Range = Range::f32_finite("a finite f32, |v| ≤ 3.4028235e38 metres");
+/// TIME, in seconds.
+pub const TIME: Range = Range::f32_finite("a finite f32, |T| ≤ 3.4028235e38 seconds");
+
+/// Parses one number of a flag: refused, with the accepted range in the message, when it is not
+/// a number, not finite (`nan`, `inf`, `1e400`) or out of `range`. `what` names the component
+/// (`the azimuth`), empty for a single number. clap puts the flag's name in front.
+pub fn parse_number(text: &str, what: &str, range: &Range) -> Result<f64, String> {
+    let t = text.trim();
+    let what = if what.is_empty() { String::new() } else { format!(" ({what})") };
+    let accepted = range.text;
+    let v: f64 = t.parse().map_err(|_| format!("`{t}`{what} is not a number; accepted: {accepted}"))?;
+    if !v.is_finite() {
+        return Err(format!("`{t}`{what} is not a finite number; accepted: {accepted}"));
+    }
+    if !range.contains(v) {
+        return Err(format!("`{t}`{what} is out of range; accepted: {accepted}"));
+    }
+    Ok(v)
+}
+
+/// Splits `N` comma-separated components.
+fn components<'a, const N: usize>(s: &'a str, names: &str) -> Result<[&'a str; N], String> {
+    let parts: Vec<&str> = s.split(',').collect();
+    parts.try_into().map_err(|_| format!("`{s}`: expected {N} comma-separated numbers ({names})"))
+}
+
+/// `--size WxH`: each side and the pixel count within the renderer's limits
+/// ([`skyrun::check_render_size`]).
+pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let max = skyrun::MAX_RENDER_SIDE;
     let (w, h) = s.split_once(['x', 'X', '×']).ok_or_else(|| format!("`{s}`: expected WxH, e.g. 256x128"))?;
     let side = |t: &str| match t.trim().parse::<u32>() {
-        Ok(v) if (1..=16384).contains(&v) => Ok(v),
-        _ => Err(format!("`{t}` is not a size between 1 and 16384")),
+        Ok(v) if (1..=max).contains(&v) => Ok(v),
+        _ => Err(format!("`{}` is not a size between 1 and {max} pixels", t.trim())),
     };
-    Ok((side(w)?, side(h)?))
+    let (w, h) = (side(w)?, side(h)?);
+    skyrun::check_render_size(w, h)?;
+    Ok((w, h))
 }
 
-fn numbers<const N: usize>(s: &str) -> Result<[f64; N], String> {
-    let parts: Vec<&str> = s.split(',').collect();
-    if parts.len() != N {
-        return Err(format!("`{s}`: expected {N} comma-separated numbers"));
+/// `--sun ELEV,AZIM`.
+pub fn parse_sun(s: &str) -> Result<(f64, f64), String> {
+    let [e, a] = components::<2>(s, "elevation, azimuth")?;
+    Ok((parse_number(e, "the elevation", &SUN_ELEVATION)?, parse_number(a, "the azimuth", &TURN)?))
+}
+
+/// `--position X,Y,Z`.
+pub fn parse_position(s: &str) -> Result<(f64, f64, f64), String> {
+    let [x, y, z] = components::<3>(s, "X, Y, Z")?;
+    Ok((parse_number(x, "X", &POSITION)?, parse_number(y, "Y", &POSITION)?, parse_number(z, "Z", &POSITION)?))
+}
+
+/// `--time T`.
+pub fn parse_time(s: &str) -> Result<f32, String> {
+    parse_number(s, "", &TIME).map(|t| t as f32)
+}
+
+/// `--fov DEG`.
+pub fn parse_fov(s: &str) -> Result<f64, String> {
+    parse_number(s, "", &FOV)
+}
+
+/// `--yaw DEG`.
+pub fn parse_yaw(s: &str) -> Result<f64, String> {
+    parse_number(s, "", &TURN)
+}
+
+/// `--pitch DEG`.
+pub fn parse_pitch(s: &str) -> Result<f64, String> {
+    parse_number(s, "", &PITCH)
+}
+
+/// Checks the `--set NAME=VALUE` pairs given for the Freeman sky's parameters (`reference`,
+/// `bench`) with the value parser `render` and `convert` use
+/// ([`gdsky_naga::reflect::parse_value`]: finite numbers within their type's range), then applies
+/// them to `params`.
+pub fn set_freeman(params: &mut skyref::FreemanParams, overrides: &[(String, String)]) -> Result<(), String> {
+    use gdsky::frontend::check::types::{Scalar, Type};
+    use skyref::UniformMut;
+    for (name, text) in overrides {
+        let ty = params.uniforms_mut().into_iter().find(|(n, _)| n == name).map(|(_, u)| match u {
+            UniformMut::Float(_) => Type::Scalar(Scalar::Float),
+            UniformMut::Int(_) => Type::Scalar(Scalar::Int),
+            UniformMut::Vec3(_) => Type::Vector(Scalar::Float, 3),
+        });
+        let Some(ty) = ty else {
+            return Err(format!("`--set {name}={text}`: the Freeman sky has no uniform `{name}`"));
+        };
+        gdsky_naga::reflect::parse_value(&ty, text).map_err(|why| format!("`--set {name}={text}`: {why}"))?;
+        params.set(name, text).map_err(|why| format!("`--set {name}={text}`: {why}"))?;
     }
-    let mut out = [0.0; N];
-    for (o, p) in out.iter_mut().zip(parts) {
-        *o = p.trim().parse::<f64>().ok().filter(|v| v.is_finite()).ok_or_else(|| format!("`{p}` is not a number"))?;
-    }
-    Ok(out)
-}
-
-fn parse_pair(s: &str) -> Result<(f64, f64), String> {
-    numbers::<2>(s).map(|[a, b]| (a, b))
-}
-
-fn parse_triple(s: &str) -> Result<(f64, f64, f64), String> {
-    numbers::<3>(s).map(|[a, b, c]| (a, b, c))
+    Ok(())
 }
 
 /// A checked, lowered shader ready to render.
@@ -217,6 +329,15 @@ pub fn strip(views: Vec<Vec<[f32; 4]>>, width: u32, height: u32) -> Result<Image
     Image::new(width * n as u32, height, pixels)
 }
 
+/// Checks, before any work, that the EXR and the PNG preview can be written where asked: the
+/// directory must exist (`render`, `reference` and `oracle` do not create it: a typo in `-o` is
+/// reported, not turned into a new folder), the path must not be a directory or a special file.
+/// Exit 2 with the reason.
+pub fn check_outputs(exr: &Path, png: Option<&PathBuf>) -> Result<(), ExitCode> {
+    super::check_output(exr)?;
+    png.map_or(Ok(()), |png| super::check_output(png))
+}
+
 /// Writes the EXR and, when asked, the PNG preview; says what it wrote. Exit 2 on failure.
 pub fn write_outputs(image: &Image, exr: &Path, png: Option<&PathBuf>) -> Result<(), ExitCode> {
     let failed = |err: skyrun::ImageError| {
@@ -230,4 +351,34 @@ pub fn write_outputs(image: &Image, exr: &Path, png: Option<&PathBuf>) -> Result
         println!("wrote {}", png.display());
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn f32_limit_is_where_rounding_overflows() {
+        assert!((F32_LIMIT as f32).is_infinite());
+        assert_eq!(f64::from_bits(F32_LIMIT.to_bits() - 1) as f32, f32::MAX);
+        assert_eq!(parse_time("3.4028235e38"), Ok(f32::MAX));
+        assert_eq!(parse_time("-3.4028235e38"), Ok(f32::MIN));
+        for bad in ["3.4028236e38", "1e39", "nan", "-inf", "infinity", "1e400", "ten", ""] {
+            assert!(parse_time(bad).is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn ranges_are_closed_or_open_as_documented() {
+        assert!(parse_fov("180").is_err() && parse_fov("0").is_err() && parse_fov("179.9").is_ok());
+        assert!(parse_pitch("90").is_ok() && parse_pitch("-90").is_ok() && parse_pitch("90.001").is_err());
+        assert!(parse_yaw("-360").is_ok() && parse_yaw("360.5").is_err());
+        assert_eq!(parse_sun(" 10 , -30 "), Ok((10.0, -30.0)));
+        assert!(parse_sun("10").unwrap_err().contains("expected 2 comma-separated numbers"));
+        let err = parse_sun("95,0").unwrap_err();
+        assert!(err.contains("(the elevation) is out of range; accepted: −90 to 90 degrees"), "{err}");
+        assert!(parse_position("0,1,0").is_ok() && parse_position("0,1e39,0").is_err());
+        assert_eq!(parse_size("8192x2048"), Ok((8192, 2048)));
+        assert!(parse_size("8192x2049").is_err() && parse_size("0x4").is_err() && parse_size("16384x1").is_err());
+    }
 }

@@ -12,6 +12,36 @@
 //! `max`/`min`/`clamp` return the other operand for a NaN (IEEE maxNum, as Godot's GLSL drivers
 //! do), `&&`/`||`/`?:` are lazy where an operand has side effects, `out` arguments are copied
 //! in and out, and `bool` uniforms travel as `u32`.
+//!
+//! WGSL and naga are stricter than GLSL about constants, and the lowering keeps GLSL's meaning
+//! by construction, at the one place every expression passes: the function builder
+//! (`builder.rs`) hands each expression to a folder (`fold.rs`) that mirrors naga's constant
+//! evaluator operation by operation. A constant naga evaluates to the same value is written as
+//! it is (the WGSL stays readable); one naga's WGSL front end or validator would refuse is
+//! written as its value, and a value that is not finite (no naga literal may hold one) as a
+//! run-time value, the load of a local variable holding its bits, bitcast to `f32`; what is
+//! computed from such a value is folded too, so a driver's fast math cannot change it. The
+//! values are the ones the translated shader has at run time, so a folded constant and the same
+//! computation at run time agree:
+//!
+//! * ints wrap (two's complement): `1136930381 << 1` is −2021106534, `2147483647 + 1` is INT_MIN;
+//! * where GLSL is undefined, naga's run-time code decides (its SPIR-V divides by 1 instead of
+//!   0 and of −1 under INT_MIN): `x / 0 = x`, `x % 0 = 0`, `INT_MIN / -1 = INT_MIN`,
+//!   `INT_MIN % -1 = 0`; a run-time division by a constant zero stays a run-time division (the
+//!   divisor is made a run-time value, which naga's validator requires);
+//! * a shift amount keeps its low 5 bits (`3 << 33` is 6, `3 << -1` is INT_MIN), at run time too
+//!   (an explicit `& 31u`: SPIR-V leaves larger amounts undefined);
+//! * a float converts to an int by clamping to the ints an f32 holds (`int(3e10)` is 2147483520,
+//!   `uint(-1.0)` is 0), as naga's code does at run time;
+//! * floats are IEEE-754 single precision: `1.0 / 0.0` is +inf, `0.0 / 0.0` NaN, `sqrt(-1.0)` NaN,
+//!   `log(0.0)` −inf, `pow` is C's `powf` (`pow(-1.0, 0.5)` NaN, `pow(-2.0, 2.0)` 4, `pow(0.0, 0.0)`
+//!   1); integer `clamp` with `low > high` is `min(max(x, low), high)`;
+//! * a global constant folded by the checker (in double precision, rounded once, as GLSL
+//!   compilers fold) becomes a module constant when finite, and is written at each use when not
+//!   (`const float INF = 1.0 / 0.0;`, real skies' "no hit" distance);
+//! * a non-void function that can fall off its end returns the zero of its type there (GLSL
+//!   leaves the result undefined; naga's WGSL front end would add an invalid `return;`);
+//! * statements after `return`, `break`, `continue` or `discard` are left out.
 
 mod builder;
 mod calls;
