@@ -15,19 +15,43 @@ use std::collections::HashMap;
 
 /// Parses a `--set` value for a uniform of type `ty`: `1.5`, `24`, `true`, or comma-separated
 /// components for vectors (`0.1,0.2,0.3`).
+///
+/// Every value must fit its type, as the GPU will hold it: a float is finite and rounds to a
+/// finite f32, i.e. at most `f32::MAX` = 3.4028235e38 in magnitude (`nan`, `inf`, `1e39` are
+/// refused; a value too small for f32 rounds to 0 or a subnormal, as a literal does), an int is within i32 (−2147483648 to 2147483647), a
+/// uint within u32 (0 to 4294967295, an optional `u` suffix). The message says which rule the
+/// text broke; `gdsky convert` reports it as `E603`, `render` as a usage error.
 pub fn parse_value(ty: &Type, text: &str) -> Result<ConstValue, String> {
     let scalar = |s: Scalar, t: &str| -> Result<ConstValue, String> {
         let t = t.trim();
         match s {
-            Scalar::Float => t.parse::<f64>().map(ConstValue::Float).map_err(|_| format!("`{t}` is not a number")),
-            Scalar::Int => {
-                t.parse::<i32>().map(|v| ConstValue::Int(i64::from(v))).map_err(|_| format!("`{t}` is not an int"))
+            Scalar::Float => {
+                let v = t.parse::<f64>().map_err(|_| format!("`{t}` is not a number"))?;
+                if !v.is_finite() {
+                    Err(format!("`{t}` is not a finite number (a float uniform cannot be NaN or infinite)"))
+                } else if (v as f32).is_infinite() {
+                    Err(format!("`{t}` overflows a float (largest magnitude {:e})", f32::MAX))
+                } else {
+                    Ok(ConstValue::Float(v))
+                }
             }
-            Scalar::UInt => t
-                .trim_end_matches('u')
-                .parse::<u32>()
-                .map(|v| ConstValue::UInt(u64::from(v)))
-                .map_err(|_| format!("`{t}` is not a uint")),
+            Scalar::Int => match t.parse::<i32>() {
+                Ok(v) => Ok(ConstValue::Int(i64::from(v))),
+                Err(_) if is_integer(t) => {
+                    Err(format!("`{t}` is out of range for an int ({} to {})", i32::MIN, i32::MAX))
+                }
+                Err(_) => Err(format!("`{t}` is not an int")),
+            },
+            Scalar::UInt => {
+                let digits = t.strip_suffix('u').unwrap_or(t);
+                match digits.parse::<u32>() {
+                    Ok(v) => Ok(ConstValue::UInt(u64::from(v))),
+                    Err(_) if is_integer(digits) => {
+                        Err(format!("`{t}` is out of range for a uint (0 to {})", u32::MAX))
+                    }
+                    Err(_) => Err(format!("`{t}` is not a uint")),
+                }
+            }
             Scalar::Bool => match t {
                 "true" => Ok(ConstValue::Bool(true)),
                 "false" => Ok(ConstValue::Bool(false)),
@@ -46,6 +70,13 @@ pub fn parse_value(ty: &Type, text: &str) -> Result<ConstValue, String> {
         }
         _ => Err("only scalar and vector uniforms can be set".into()),
     }
+}
+
+/// An optionally signed run of decimal digits: an integer too large for its type, rather than
+/// something that is not an integer at all.
+fn is_integer(t: &str) -> bool {
+    let digits = t.strip_prefix(['-', '+']).unwrap_or(t);
+    !digits.is_empty() && digits.bytes().all(|b| b.is_ascii_digit())
 }
 
 fn value_json(v: &ConstValue) -> Value {
@@ -189,4 +220,44 @@ pub fn reflection(name: &str, shader: &CheckedShader, lowered: &Lowered, baked: 
             "process_mode": process_mode,
         },
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parse_value_refuses_non_finite_and_overflowing_numbers() {
+        let float = Type::Scalar(Scalar::Float);
+        assert!(matches!(parse_value(&float, " 1.5 "), Ok(ConstValue::Float(v)) if v == 1.5));
+        assert!(matches!(parse_value(&float, "3.4028235e38"), Ok(ConstValue::Float(_))));
+        assert!(matches!(parse_value(&float, "-3.4028235e38"), Ok(ConstValue::Float(_))));
+        assert!(matches!(parse_value(&float, "1e-50"), Ok(ConstValue::Float(_))));
+        for bad in ["nan", "NaN", "inf", "-inf", "infinity", "1e400"] {
+            let err = parse_value(&float, bad).unwrap_err();
+            assert!(err.contains("not a finite number"), "{bad}: {err}");
+        }
+        for bad in ["1e39", "-3.5e38"] {
+            let err = parse_value(&float, bad).unwrap_err();
+            assert!(err.contains("overflows a float"), "{bad}: {err}");
+        }
+        let int = Type::Scalar(Scalar::Int);
+        assert!(matches!(parse_value(&int, "-2147483648"), Ok(ConstValue::Int(-2147483648))));
+        for bad in ["2147483648", "-2147483649", "99999999999999999999999"] {
+            let err = parse_value(&int, bad).unwrap_err();
+            assert!(err.contains("out of range for an int"), "{bad}: {err}");
+        }
+        assert!(parse_value(&int, "1.5").unwrap_err().contains("not an int"));
+        let uint = Type::Scalar(Scalar::UInt);
+        assert!(matches!(parse_value(&uint, "4294967295u"), Ok(ConstValue::UInt(4294967295))));
+        for bad in ["4294967296", "-1", "5000000000u"] {
+            let err = parse_value(&uint, bad).unwrap_err();
+            assert!(err.contains("out of range for a uint"), "{bad}: {err}");
+        }
+        let vec3 = Type::Vector(Scalar::Float, 3);
+        assert!(parse_value(&vec3, "0.1,0.2,0.3").is_ok());
+        assert!(parse_value(&vec3, "0.1,nan,0.3").unwrap_err().contains("`nan` is not a finite number"));
+        let ivec2 = Type::Vector(Scalar::Int, 2);
+        assert!(parse_value(&ivec2, "1,3000000000").unwrap_err().contains("out of range"));
+    }
 }
