@@ -17,7 +17,7 @@
 //! exactly, its pixels match the checksum recorded with them, and a few pixels recomputed now
 //! match it bit for bit. Anything else is recomputed.
 
-use super::scene::{ProjectionArg, SceneArgs, open_gpu, strip};
+use super::scene::{ProjectionArg, SceneArgs, open_gpu, set_freeman, strip};
 use super::sweep::{self, ErrorStats};
 use super::{environment, usage};
 use clap::Args;
@@ -40,19 +40,20 @@ pub struct BenchArgs {
     /// one, the bundled Freeman sky.
     #[arg(value_name = "FILE")]
     file: Option<PathBuf>,
-    /// Folder for bench.csv and bench.png (created if missing).
+    /// Folder for bench.csv and bench.png (created if missing; checked before any work).
     #[arg(short = 'o', long = "out-dir", value_name = "DIR", default_value = "out/bench")]
     out_dir: PathBuf,
-    /// Timed renders per configuration, after one warm-up render; the median is reported.
-    #[arg(long, value_name = "N", default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1000))]
+    /// Timed renders per configuration (1 to 1000), after one warm-up render; the median is
+    /// reported.
+    #[arg(long, value_name = "N", default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1000), allow_hyphen_values = true)]
     runs: u32,
     /// Sweep an int uniform: `--knob view_samples=4,8,16`. view_samples (4,8,12,16,24,32,48,64)
     /// and sun_samples (2,4,8,16) are swept by default; a --knob replaces a default list or adds
-    /// a dimension. Repeatable.
+    /// a dimension. Values are sample counts, 1 to 4096. Repeatable.
     #[arg(long = "knob", value_name = "NAME=V1,V2,…")]
     knobs: Vec<String>,
-    /// Sample counts of the truth (skyref f64): VIEW,SUN.
-    #[arg(long, value_name = "VIEW,SUN", default_value = "1024,256", value_parser = parse_counts)]
+    /// Sample counts of the truth (skyref f64): VIEW,SUN, each 1 to 16384.
+    #[arg(long, value_name = "VIEW,SUN", default_value = "1024,256", value_parser = parse_counts, allow_hyphen_values = true)]
     truth_samples: (i32, i32),
     /// Where truth images are cached [default: $GDSKY_CACHE_DIR, else $XDG_CACHE_HOME/gdsky,
     /// else ~/.cache/gdsky, else the temp dir's gdsky-cache].
@@ -62,11 +63,18 @@ pub struct BenchArgs {
     scene: SceneArgs,
 }
 
+/// Largest sample count of the truth (`--truth-samples`): 16× the default view samples; the f64
+/// truth's time grows with the product of the two.
+const MAX_TRUTH_SAMPLES: i32 = 16384;
+/// Largest value of a swept int uniform (`--knob`): they are sample counts (64 × 16 is the
+/// default sweep's largest).
+const MAX_KNOB: i32 = 4096;
+
 fn parse_counts(s: &str) -> Result<(i32, i32), String> {
     let (a, b) = s.split_once(',').ok_or_else(|| format!("`{s}`: expected VIEW,SUN, e.g. 1024,256"))?;
     let count = |t: &str| match t.trim().parse::<i32>() {
-        Ok(v) if v >= 1 => Ok(v),
-        _ => Err(format!("`{t}` is not a positive sample count")),
+        Ok(v) if (1..=MAX_TRUTH_SAMPLES).contains(&v) => Ok(v),
+        _ => Err(format!("`{}` is not a sample count from 1 to {MAX_TRUTH_SAMPLES}", t.trim())),
     };
     Ok((count(a)?, count(b)?))
 }
@@ -114,7 +122,10 @@ fn knobs(args: &[String]) -> Result<Vec<Knob>, String> {
         }
         let values = list
             .split(',')
-            .map(|v| v.trim().parse::<i32>().map_err(|_| format!("`--knob {arg}`: `{v}` is not an int")))
+            .map(|v| match v.trim().parse::<i32>() {
+                Ok(n) if (1..=MAX_KNOB).contains(&n) => Ok(n),
+                _ => Err(format!("`--knob {arg}`: `{}` is not a sample count from 1 to {MAX_KNOB}", v.trim())),
+            })
             .collect::<Result<Vec<_>, _>>()?;
         match knobs.iter_mut().find(|k| k.name == name) {
             Some(k) => k.values = values,
@@ -159,18 +170,15 @@ fn with_knobs(base: &FreemanParams, knobs: &[Knob], values: &[i32]) -> Result<Fr
 fn bench(args: &BenchArgs) -> Result<(), ExitCode> {
     let (views, width, height) = args.scene.views().map_err(usage)?;
     let mut base = FreemanParams::default();
-    for (name, text) in args.scene.overrides().map_err(usage)? {
-        base.set(&name, &text).map_err(usage)?;
-    }
+    set_freeman(&mut base, &args.scene.overrides().map_err(usage)?).map_err(usage)?;
     let knobs = knobs(&args.knobs).map_err(usage)?;
     let configs = combinations(&knobs);
     if configs.is_empty() {
         return Err(usage("the sweep is empty"));
     }
+    super::check_output_dir(&args.out_dir, true, &["bench.csv", "bench.png"])?;
     let loaded = sweep::load_freeman(args.file.as_deref())?;
     let shader_name = args.file.as_ref().map(|f| f.display().to_string()).unwrap_or("freeman_sky (bundled)".into());
-    std::fs::create_dir_all(&args.out_dir)
-        .map_err(|e| environment(format!("cannot create {}: {e}", args.out_dir.display())))?;
     let gpu = open_gpu()?;
     let adapter = gpu.adapter_info();
     let timer = if gpu.has_timestamps() { "gpu_timestamps" } else { "wall" };
@@ -266,8 +274,8 @@ fn bench(args: &BenchArgs) -> Result<(), ExitCode> {
 
     let csv_path = args.out_dir.join("bench.csv");
     let csv = csv_text(&knobs, &rows, args.runs, timer);
-    super::write_atomically(&csv_path, csv.as_bytes())
-        .map_err(|e| environment(format!("cannot write {}: {e}", csv_path.display())))?;
+    super::create_output_dir(&args.out_dir)?;
+    super::write_file(&csv_path, csv.as_bytes()).map_err(environment)?;
     let png_path = args.out_dir.join("bench.png");
     let title = format!("{shader_name} on {}: {}x{} {}", adapter.name, width, height, projection_name(&args.scene));
     let defaults: Vec<i32> = knobs.iter().filter_map(|k| int_value(&base, &k.name)).collect();
@@ -549,6 +557,9 @@ fn truth_pixel(
     [c.x as f32, c.y as f32, c.z as f32, 0.0]
 }
 
+/// Largest cache key file read (a key is a few hundred bytes).
+const MAX_KEY_BYTES: u64 = 64 << 10;
+
 /// The converged truth of the scene, from the cache when a valid entry exists; else computed
 /// (rows in parallel) and stored. The string says which.
 fn cached_truth(
@@ -570,7 +581,8 @@ fn cached_truth(
         if !key_path.exists() {
             return Err("not cached yet".into());
         }
-        let stored = std::fs::read_to_string(&key_path).map_err(|e| e.to_string())?;
+        let stored = skyrun::safe_io::read_limited(&key_path, MAX_KEY_BYTES).map_err(|e| e.to_string())?;
+        let stored = String::from_utf8(stored).map_err(|_| "the key is not UTF-8")?;
         let (stored_key, sum) = stored.rsplit_once("checksum=").ok_or("no checksum")?;
         if stored_key != key {
             return Err("the key differs (hash collision or another version)".into());
@@ -606,12 +618,12 @@ fn cached_truth(
                 pixels: vec![[0.0; 4]; (strip_w * height) as usize],
             });
             let elapsed = started.elapsed();
-            let stored = std::fs::create_dir_all(dir)
-                .map_err(|e| e.to_string())
+            let stored = skyrun::safe_io::create_output_dir(dir)
+                .map_err(|e| format!("{}: {e}", dir.display()))
                 .and_then(|()| skyrun::write_exr(&exr, &image).map_err(|e| e.to_string()))
                 .and_then(|()| {
                     let text = format!("{key}checksum={:016x}\n", checksum(&image.pixels));
-                    super::write_atomically(&key_path, text.as_bytes()).map_err(|e| e.to_string())
+                    super::write_file(&key_path, text.as_bytes())
                 });
             let note = match stored {
                 Ok(()) => format!("truth: computed in {elapsed:.1?} ({why}), cached as {}", exr.display()),

@@ -1,5 +1,6 @@
 //! `gdsky compare A.exr B.exr [--max-rel X] [--floor F] [--heatmap OUT.png]`
 
+use super::scene::{F32_LIMIT, Range, parse_number};
 use clap::Args;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -13,12 +14,12 @@ pub struct CompareArgs {
     #[arg(value_name = "B.exr")]
     b: PathBuf,
     /// Fail (exit 1) when the largest relative error is above X, or any channel is NaN or
-    /// infinite. Without it, compare only reports.
-    #[arg(long, value_name = "X")]
+    /// infinite. X is a finite number ≥ 0. Without it, compare only reports.
+    #[arg(long, value_name = "X", value_parser = parse_max_rel, allow_hyphen_values = true)]
     max_rel: Option<f64>,
     /// Relative error per RGB channel is |a − b| / max(|b|, F): F keeps near-black pixels from
-    /// dominating.
-    #[arg(long, value_name = "F", default_value_t = 1e-4)]
+    /// dominating. F is more than 0 and finite in f32 (≤ 3.4028235e38).
+    #[arg(long, value_name = "F", default_value = "1e-4", value_parser = parse_floor, allow_hyphen_values = true)]
     floor: f32,
     /// Write a heatmap of the per-pixel relative error (log scale 1e-7 … 1; NaN/Inf magenta).
     #[arg(long, value_name = "OUT.png")]
@@ -29,10 +30,29 @@ pub struct CompareArgs {
     side_by_side: Option<PathBuf>,
 }
 
+/// `--max-rel X`: a bound on a relative error, 0 or more.
+const MAX_REL: Range = Range::closed(0.0, f64::MAX, "a finite number ≥ 0");
+/// `--floor F`: a positive denominator, finite in f32 (the images' precision).
+const FLOOR: Range =
+    Range { min: 0.0, max: F32_LIMIT, min_open: true, max_open: true, text: "more than 0, ≤ 3.4028235e38" };
+
+fn parse_max_rel(s: &str) -> Result<f64, String> {
+    parse_number(s, "", &MAX_REL)
+}
+
+fn parse_floor(s: &str) -> Result<f32, String> {
+    // Rounded to f32 after the check, so a tiny positive value that rounds to 0 is refused too.
+    parse_number(s, "", &FLOOR).map(|f| f as f32).and_then(|f| {
+        if f > 0.0 { Ok(f) } else { Err(format!("`{}` rounds to 0 in f32; accepted: {}", s.trim(), FLOOR.text)) }
+    })
+}
+
 pub fn run(args: &CompareArgs) -> ExitCode {
-    if !(args.floor.is_finite() && args.floor > 0.0) {
-        eprintln!("error: --floor {} must be a positive number", args.floor);
-        return ExitCode::from(1);
+    // The outputs first: a typo in --heatmap costs nothing.
+    for path in [&args.heatmap, &args.side_by_side].into_iter().flatten() {
+        if let Err(code) = super::check_output(path) {
+            return code;
+        }
     }
     let read = |path: &PathBuf| {
         skyrun::read_exr(path).map_err(|err| {

@@ -11,26 +11,42 @@ pub mod scene;
 pub mod stress;
 pub mod sweep;
 
-use std::io::Write;
 use std::path::Path;
 use std::process::ExitCode;
 
-/// Writes `bytes` to `path` atomically: into a temporary file beside it, then renamed over it,
-/// so a reader (or a failed run) never sees a half-written file.
-pub fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
-    let result = (|| {
-        let mut f = std::fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-        std::fs::rename(&tmp, path)
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
+/// Checks, before any work, that `path` can be written (see [`skyrun::safe_io`]: a regular file,
+/// absent in an existing directory, or a symbolic link to one; never a directory, device, FIFO or
+/// socket; the directory writable). Exit 2 with the reason: the environment is wrong.
+pub fn check_output(path: &Path) -> Result<(), ExitCode> {
+    skyrun::safe_io::check_output(path)
+        .map(drop)
+        .map_err(|err| environment(format!("cannot write {}: {err}", path.display())))
+}
+
+/// Checks, before any work, an output folder and the files the command will write into it:
+/// the folder exists or, with `create`, can be created; each file that exists there can be
+/// replaced. Exit 2 with the reason.
+pub fn check_output_dir(dir: &Path, create: bool, files: &[&str]) -> Result<(), ExitCode> {
+    skyrun::safe_io::check_output_dir(dir, create)
+        .map_err(|err| environment(format!("cannot write into {}: {err}", dir.display())))?;
+    if dir.is_dir() {
+        for file in files {
+            check_output(&dir.join(file))?;
+        }
     }
-    result
+    Ok(())
+}
+
+/// Creates an output folder (when the outputs are ready, after [`check_output_dir`]). Exit 2.
+pub fn create_output_dir(dir: &Path) -> Result<(), ExitCode> {
+    skyrun::safe_io::create_output_dir(dir)
+        .map_err(|err| environment(format!("cannot create {}: {err}", dir.display())))
+}
+
+/// Writes `bytes` to `path` with the one safe, atomic writer ([`skyrun::safe_io::write_atomically`]);
+/// the error names the file.
+pub fn write_file(path: &Path, bytes: &[u8]) -> Result<(), String> {
+    skyrun::safe_io::write_atomically(path, bytes).map_err(|err| format!("cannot write {}: {err}", path.display()))
 }
 
 /// Prints `message` as an error and gives exit code 1: the input is wrong (CLI contract).

@@ -4,7 +4,7 @@
 //! at bracketed background energies, are inverted into the shader's linear COLOR, so
 //! `gdsky compare` can hold `gdsky render` against Godot itself.
 
-use super::scene::{BUNDLED_FREEMAN, ProjectionArg, SceneArgs, write_outputs};
+use super::scene::{BUNDLED_FREEMAN, ProjectionArg, SceneArgs, check_outputs, write_outputs};
 use clap::Args;
 use gdsky::frontend::check::consteval::ConstValue;
 use gdsky::frontend::check::types::{Scalar, Type};
@@ -52,15 +52,14 @@ fn oracle(args: &OracleArgs) -> Result<(), ExitCode> {
     let scene = SceneArgs { projection: Some(ProjectionArg::Camera), ..args.scene.clone() };
     let (_, width, height) = scene.views().map_err(usage)?;
     let overrides = scene.overrides().map_err(usage)?;
+    check_outputs(&args.out, args.png.as_ref())?;
 
     // gdsky checks the shader first: the uniform types for --set, and a clear diagnostic before
     // Godot is started for nothing.
     let loaded = super::scene::load_shader(args.file.as_deref())?;
+    // The text the front end read and checked (not a second read of FILE, which could differ).
     let code = match &args.file {
-        Some(path) => std::fs::read_to_string(path).map_err(|err| {
-            eprintln!("error: cannot read {}: {err}", path.display());
-            ExitCode::from(2)
-        })?,
+        Some(_) => loaded.front.db.text(loaded.front.root).to_string(),
         None => BUNDLED_FREEMAN.to_string(),
     };
     let checked = loaded.front.shader.as_ref().ok_or(ExitCode::from(1))?;

@@ -1,6 +1,6 @@
 //! `gdsky render [FILE] -o OUT.exr …` and `gdsky reference -o OUT.exr … [--precision f32|f64]`.
 
-use super::scene::{SceneArgs, load_shader, open_gpu, strip, write_outputs};
+use super::scene::{SceneArgs, check_outputs, load_shader, open_gpu, set_freeman, strip, write_outputs};
 use super::usage;
 use clap::{Args, ValueEnum};
 use skyrun::{SkyBuiltins, material_with_defaults};
@@ -13,7 +13,8 @@ pub struct RenderArgs {
     /// The sky shader to render; without one, the bundled Freeman sky.
     #[arg(value_name = "FILE")]
     file: Option<PathBuf>,
-    /// The EXR to write: RGBA 32-bit float, scanline, row 0 at the top (replaced atomically).
+    /// The EXR to write: RGBA 32-bit float, scanline, row 0 at the top (replaced atomically; a
+    /// symbolic link is written through to its target). Its directory must exist.
     #[arg(short = 'o', long = "out", value_name = "OUT.exr")]
     out: PathBuf,
     /// Also write an 8-bit PNG preview, tone mapped 1 − exp(−L·0.5) and gamma 2.2.
@@ -33,11 +34,13 @@ pub fn run(args: &RenderArgs) -> ExitCode {
 fn render(args: &RenderArgs) -> Result<(), ExitCode> {
     let (views, width, height) = args.scene.views().map_err(usage)?;
     let overrides = args.scene.overrides().map_err(usage)?;
+    check_outputs(&args.out, args.png.as_ref())?;
     let started = Instant::now();
     let loaded = load_shader(args.file.as_deref())?;
     let convert_time = started.elapsed();
     let shader_info = loaded.front.shader.as_ref().ok_or(ExitCode::from(1))?;
-    let material = material_with_defaults(shader_info, &loaded.lowered, &overrides).map_err(usage)?;
+    let material =
+        material_with_defaults(shader_info, &loaded.lowered, &overrides).map_err(|e| usage(format!("--set: {e}")))?;
     let gpu = open_gpu()?;
     let shader = loaded.compile(&gpu)?;
     let mut builtins = SkyBuiltins::from_scene(&args.scene.scene(), width, height);
@@ -71,7 +74,8 @@ pub enum Precision {
 
 #[derive(Args)]
 pub struct ReferenceArgs {
-    /// The EXR to write: RGBA 32-bit float, scanline, row 0 at the top (replaced atomically).
+    /// The EXR to write: RGBA 32-bit float, scanline, row 0 at the top (replaced atomically; a
+    /// symbolic link is written through to its target). Its directory must exist.
     #[arg(short = 'o', long = "out", value_name = "OUT.exr")]
     out: PathBuf,
     /// Also write an 8-bit PNG preview, tone mapped as `render`'s.
@@ -94,6 +98,7 @@ pub fn run_reference(args: &ReferenceArgs) -> ExitCode {
 fn reference(args: &ReferenceArgs) -> Result<(), ExitCode> {
     let (views, width, height) = args.scene.views().map_err(usage)?;
     let params = freeman_params(&args.scene.overrides().map_err(usage)?).map_err(usage)?;
+    check_outputs(&args.out, args.png.as_ref())?;
     let scene = args.scene.scene();
     let started = Instant::now();
     let rendered: Vec<Vec<[f32; 4]>> = views
@@ -114,11 +119,10 @@ fn reference(args: &ReferenceArgs) -> Result<(), ExitCode> {
     write_outputs(&image, &args.out, args.png.as_ref())
 }
 
-/// The Freeman sky's parameters with `--set` overrides applied (by the shader's uniform names).
+/// The Freeman sky's parameters with `--set` overrides applied (by the shader's uniform names),
+/// each value checked as `render --set` checks it.
 pub fn freeman_params(overrides: &[(String, String)]) -> Result<skyref::FreemanParams, String> {
     let mut params = skyref::FreemanParams::default();
-    for (name, text) in overrides {
-        params.set(name, text)?;
-    }
+    set_freeman(&mut params, overrides)?;
     Ok(params)
 }

@@ -60,7 +60,8 @@ pub struct StressArgs {
     /// scale heights at 0, small images.
     #[arg(long)]
     quick: bool,
-    /// Folder for stress.md, stress.csv, grid.png and the heatmaps (created if missing).
+    /// Folder for stress.md, stress.csv, grid.png and the heatmaps (created if missing; checked
+    /// before any work).
     #[arg(short = 'o', long = "out-dir", value_name = "DIR", default_value = "out/stress")]
     out_dir: PathBuf,
 }
@@ -216,8 +217,7 @@ fn stress(args: &StressArgs) -> Result<ExitCode, ExitCode> {
     for case in &cases {
         case.params().map_err(|e| usage(format!("{name}: hint_range end not usable: {e}")))?;
     }
-    std::fs::create_dir_all(&args.out_dir)
-        .map_err(|e| environment(format!("cannot create {}: {e}", args.out_dir.display())))?;
+    super::check_output_dir(&args.out_dir, true, &["stress.md", "stress.csv", "grid.png"])?;
     let gpu = open_gpu()?;
     let adapter = gpu.adapter_info();
     let shader = loaded.compile(&gpu)?;
@@ -267,6 +267,7 @@ fn stress(args: &StressArgs) -> Result<ExitCode, ExitCode> {
     let elapsed = started.elapsed();
 
     let summary = Summary::of(&outcomes);
+    super::create_output_dir(&args.out_dir)?;
     // Heatmaps: the horizon case's views (GPU and CPU), then the worst cases at defaults.
     let mut heatmaps = Vec::new();
     let mut worst_defaults: Vec<&Outcome> = outcomes.iter().filter(|o| o.case.uniform.is_none()).collect();
@@ -308,11 +309,9 @@ fn stress(args: &StressArgs) -> Result<ExitCode, ExitCode> {
     };
     let report = report_markdown(&context, &outcomes, &summary);
     let md_path = args.out_dir.join("stress.md");
-    super::write_atomically(&md_path, report.as_bytes())
-        .map_err(|e| environment(format!("cannot write {}: {e}", md_path.display())))?;
+    super::write_file(&md_path, report.as_bytes()).map_err(environment)?;
     let csv_path = args.out_dir.join("stress.csv");
-    super::write_atomically(&csv_path, csv_text(&outcomes).as_bytes())
-        .map_err(|e| environment(format!("cannot write {}: {e}", csv_path.display())))?;
+    super::write_file(&csv_path, csv_text(&outcomes).as_bytes()).map_err(environment)?;
 
     println!("gdsky stress: {name}, {} cases ({}), {:.1?}", outcomes.len(), mode(args.quick), elapsed);
     println!("adapter  {adapter}");

@@ -175,7 +175,7 @@ pub fn write_rgb_png(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result
         writer.write_image_data(rgb).map_err(|e| format!("cannot encode {}: {e}", path.display()))?;
         writer.finish().map_err(|e| format!("cannot encode {}: {e}", path.display()))?;
     }
-    super::write_atomically(path, &bytes).map_err(|e| format!("cannot write {}: {e}", path.display()))
+    super::write_file(path, &bytes)
 }
 
 /// A progress bar on stderr in the style of `gdsky demo` (indicatif hides it when stderr is
