@@ -80,9 +80,10 @@ pub fn compile_into(shader: &Path, out_dir: &Path) -> Result<Compiled, BuildErro
         return Err(fail(render(&front.diagnostics)));
     };
     let lowered = gdsky_naga::lower(&front).map_err(|d| fail(render(&d)))?;
-    let wgsl = gdsky_naga::to_wgsl(&lowered).map_err(|e| fail(format!("error: naga's WGSL writer failed: {e}\n")))?;
-    let words =
-        gdsky_naga::to_spirv(&lowered).map_err(|e| fail(format!("error: naga's SPIR-V writer failed: {e}\n")))?;
+    // Both texts are re-read and validated by naga before they come back: nothing unreadable
+    // reaches OUT_DIR.
+    let wgsl = gdsky_naga::to_wgsl(&lowered).map_err(|e| fail(render(&[e.diagnostic(&front)])))?;
+    let words = gdsky_naga::to_spirv(&lowered).map_err(|e| fail(render(&[e.diagnostic(&front)])))?;
     let stem = shader.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "shader".into());
     let reflection = gdsky_naga::reflect::reflection(&stem, checked, &lowered, &HashMap::new());
     let rust = material_struct(&stem, checked, &lowered);

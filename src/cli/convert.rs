@@ -57,17 +57,12 @@ pub fn run(args: &ConvertArgs) -> ExitCode {
             return ExitCode::from(1);
         }
     };
-    let wgsl = match gdsky_naga::to_wgsl(&lowered) {
-        Ok(w) => w,
+    // Both texts come back re-read and validated by naga's own front ends, or not at all.
+    let emitted = gdsky_naga::to_wgsl(&lowered).and_then(|w| Ok((w, gdsky_naga::to_spirv(&lowered)?)));
+    let (wgsl, spirv) = match emitted {
+        Ok((w, words)) => (w, words.iter().flat_map(|w| w.to_le_bytes()).collect::<Vec<u8>>()),
         Err(err) => {
-            eprintln!("error[{}]: naga's WGSL writer failed: {err}", gdsky_naga::BACKEND);
-            return ExitCode::from(1);
-        }
-    };
-    let spirv = match gdsky_naga::to_spirv(&lowered) {
-        Ok(words) => words.iter().flat_map(|w| w.to_le_bytes()).collect::<Vec<u8>>(),
-        Err(err) => {
-            eprintln!("error[{}]: naga's SPIR-V writer failed: {err}", gdsky_naga::BACKEND);
+            eprint!("{}", render_human(&front.db, &[err.diagnostic(&front)], color));
             return ExitCode::from(1);
         }
     };

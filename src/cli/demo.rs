@@ -81,7 +81,7 @@ fn demo(out: &Path) -> Result<(), ExitCode> {
     let loaded = load_shader(None)?;
     let LoadedShader { front, lowered, wgsl } = &loaded;
     let spirv = gdsky_naga::to_spirv(lowered).map_err(|err| {
-        eprintln!("error[{}]: naga's SPIR-V writer failed: {err}", gdsky_naga::BACKEND);
+        eprint!("{}", gdsky::frontend::diag::render_human(&front.db, &[err.diagnostic(front)], false));
         ExitCode::from(1)
     })?;
     let convert_time = t.elapsed();

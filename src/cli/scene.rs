@@ -295,7 +295,7 @@ pub fn load_shader(file: Option<&Path>) -> Result<LoadedShader, ExitCode> {
         ExitCode::from(1)
     })?;
     let wgsl = gdsky_naga::to_wgsl(&lowered).map_err(|err| {
-        eprintln!("error[{}]: naga's WGSL writer failed: {err}", gdsky_naga::BACKEND);
+        eprint!("{}", render_human(&front.db, &[err.diagnostic(&front)], color));
         ExitCode::from(1)
     })?;
     Ok(LoadedShader { front, lowered, wgsl })
