@@ -80,13 +80,30 @@ pub fn compile_into(shader: &Path, out_dir: &Path) -> Result<Compiled, BuildErro
         return Err(fail(render(&front.diagnostics)));
     };
     let lowered = gdsky_naga::lower(&front).map_err(|d| fail(render(&d)))?;
-    // Both texts are re-read and validated by naga before they come back: nothing unreadable
-    // reaches OUT_DIR.
-    let wgsl = gdsky_naga::to_wgsl(&lowered).map_err(|e| fail(render(&[e.diagnostic(&front)])))?;
-    let words = gdsky_naga::to_spirv(&lowered).map_err(|e| fail(render(&[e.diagnostic(&front)])))?;
     let stem = shader.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "shader".into());
-    let reflection = gdsky_naga::reflect::reflection(&stem, checked, &lowered, &HashMap::new());
-    let rust = material_struct(&stem, checked, &lowered);
+    write_lowered(&front, checked, &lowered, &stem, out_dir)
+}
+
+/// The second half of [`compile_into`]: emits a lowered shader as `<stem>.{wgsl,spv,json,rs}` in
+/// `out_dir`. Both texts are read back and validated by naga before anything is written, so a
+/// module that does not hold up (a gdsky bug) leaves `out_dir` as it was and comes back as
+/// [`BuildError::Shader`] with an E604 diagnostic at the user's function.
+pub fn write_lowered(
+    front: &gdshader::FrontendOutput,
+    checked: &gdshader::CheckedShader,
+    lowered: &gdsky_naga::Lowered,
+    stem: &str,
+    out_dir: &Path,
+) -> Result<Compiled, BuildError> {
+    let fail = |e: gdsky_naga::EmitError| {
+        let text = gdshader::diag::render_human(&front.db, &[e.diagnostic(front)], false);
+        eprint!("{text}");
+        BuildError::Shader(text)
+    };
+    let wgsl = gdsky_naga::to_wgsl(lowered).map_err(fail)?;
+    let words = gdsky_naga::to_spirv(lowered).map_err(fail)?;
+    let reflection = gdsky_naga::reflect::reflection(stem, checked, lowered, &HashMap::new());
+    let rust = material_struct(stem, checked, lowered);
     let compiled = Compiled {
         wgsl: out_dir.join(format!("{stem}.wgsl")),
         spirv: out_dir.join(format!("{stem}.spv")),

@@ -1,11 +1,14 @@
 //! Whatever gdsky emits is read back by naga's own front ends before it is handed out: a module
 //! that naga's IR validator accepts but whose WGSL text no WGSL compiler would take is refused
-//! with a diagnostic at the user's function, and no text comes back.
+//! with a diagnostic at the user's function, no text comes back and no file is written.
 
+mod common;
+
+use gdsky::frontend as gdshader;
 use std::path::Path;
 
 fn freeman() -> (gdshader::FrontendOutput, gdsky_naga::Lowered) {
-    let _ = std::env::set_current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join("../.."));
+    let _ = std::env::set_current_dir(env!("CARGO_MANIFEST_DIR"));
     let front = gdshader::check_file(Path::new("fixtures/freeman_sky.gdshader")).expect("fixture reads");
     let lowered = gdsky_naga::lower(&front).expect("the Freeman sky lowers");
     (front, lowered)
@@ -68,4 +71,26 @@ fn corrupt_text_is_refused_with_naga_s_message() {
         .expect_err("text naga cannot read must be refused");
     assert!(err.reread);
     assert_eq!(err.format, "WGSL");
+}
+
+#[test]
+fn a_module_that_does_not_read_back_writes_nothing() {
+    let (front, lowered) = freeman();
+    let checked = front.shader.as_ref().expect("checked");
+    let out = common::scratch("reread", "writes_nothing");
+
+    // The same module, intact, writes its four files: the directory is usable.
+    let good = common::scratch("reread", "writes_four");
+    gdsky::build::write_lowered(&front, checked, &lowered, "freeman_sky", &good).expect("an intact module is written");
+    assert_eq!(std::fs::read_dir(&good).expect("listable").count(), 4);
+
+    let broken = without_returns(lowered, "get_mie_phase");
+    match gdsky::build::write_lowered(&front, checked, &broken, "freeman_sky", &out) {
+        Err(gdsky::build::BuildError::Shader(text)) => {
+            assert!(text.contains("error[E604]") && text.contains("freeman_sky.gdshader:190:"), "{text}");
+        }
+        other => panic!("expected an E604 refusal, got {other:?}"),
+    }
+    let left: Vec<_> = std::fs::read_dir(&out).expect("listable").map(|e| e.map(|e| e.file_name())).collect();
+    assert!(left.is_empty(), "nothing may be written, found {left:?}");
 }
