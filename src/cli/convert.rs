@@ -20,6 +20,10 @@ pub struct ConvertArgs {
     /// `--set ground_color=0.1,0.1,0.1`. Baked uniforms leave the material block.
     #[arg(long = "set", value_name = "NAME=VALUE")]
     set: Vec<String>,
+    /// Reversed Z: the vertex entry puts the sky at depth 0 (the far plane when near is 1; depth
+    /// test GreaterEqual, clear 0) instead of 1. The reflection's `depth` says which.
+    #[arg(long)]
+    reversed_z: bool,
 }
 
 pub fn run(args: &ConvertArgs) -> ExitCode {
@@ -50,13 +54,16 @@ pub fn run(args: &ConvertArgs) -> ExitCode {
     let Some(shader) = front.shader.as_ref() else {
         return ExitCode::from(1);
     };
-    let lowered = match gdsky_naga::lower_with(&front, &baked) {
+    let mut lowered = match gdsky_naga::lower_with(&front, &baked) {
         Ok(l) => l,
         Err(diags) => {
             eprint!("{}", render_human(&front.db, &diags, color));
             return ExitCode::from(1);
         }
     };
+    if args.reversed_z {
+        gdsky_naga::wrapper::set_far_plane_depth(&mut lowered.module, gdsky_naga::wrapper::FAR_PLANE_REVERSED);
+    }
     // Both texts come back re-read and validated by naga's own front ends, or not at all.
     let emitted = gdsky_naga::to_wgsl(&lowered).and_then(|w| Ok((w, gdsky_naga::to_spirv(&lowered)?)));
     let (wgsl, spirv) = match emitted {

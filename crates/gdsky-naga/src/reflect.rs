@@ -207,6 +207,7 @@ pub fn reflection(name: &str, shader: &CheckedShader, lowered: &Lowered, baked: 
             "textures": textures.iter().map(|t| t.1.clone()).collect::<Vec<_>>(),
             "samplers": textures.iter().map(|t| t.2.clone()).collect::<Vec<_>>(),
         },
+        "depth": depth_json(&lowered.module),
         "uniforms": uniforms,
         "baked": baked.iter().map(|(k, v)| (k.clone(), json!(v))).collect::<serde_json::Map<_, _>>(),
         "builtins_used": used,
@@ -220,6 +221,27 @@ pub fn reflection(name: &str, shader: &CheckedShader, lowered: &Lowered, baked: 
             "process_mode": process_mode,
         },
     })
+}
+
+/// The depth convention of `vs_main`: where the sky lies (the far plane), and the depth test
+/// and clear value a host uses so that geometry drawn first hides it (`gdsky convert
+/// --reversed-z` gives `far_plane` 0).
+fn depth_json(module: &naga::Module) -> Value {
+    match crate::wrapper::far_plane_depth(module) {
+        Some(far) if far == crate::wrapper::FAR_PLANE_REVERSED => json!({
+            "convention": "reversed_z",
+            "far_plane": far,
+            "compare": "greater_equal",
+            "clear": far,
+        }),
+        Some(far) => json!({
+            "convention": "standard_z",
+            "far_plane": far,
+            "compare": "less_equal",
+            "clear": far,
+        }),
+        None => Value::Null,
+    }
 }
 
 #[cfg(test)]

@@ -271,6 +271,56 @@ pub(crate) fn entry_points(lw: &mut Lowerer) {
     }
 }
 
+/// The far plane's depth with standard Z (near 0, far 1; depth test `LessEqual`, clear 1).
+pub const FAR_PLANE_STANDARD: f32 = 1.0;
+/// The far plane's depth with reversed Z (near 1, far 0; depth test `GreaterEqual`, clear 0).
+pub const FAR_PLANE_REVERSED: f32 = 0.0;
+
+/// The depth `vs_main` gives the sky (its position's z; w is 1): the far plane of the module's
+/// depth convention. `None` when the module has no `vs_main` of the wrapper's form (a module
+/// not built by gdsky, or WGSL from before the sky moved to the far plane, which drew it at 0).
+pub fn far_plane_depth(module: &naga::Module) -> Option<f32> {
+    let (function, z) = vertex_depth(module)?;
+    match function.expressions[z] {
+        E::Literal(Literal::F32(v)) => Some(v),
+        _ => None,
+    }
+}
+
+/// Moves the sky of a lowered module to `depth` (its far plane: [`FAR_PLANE_STANDARD`] or
+/// [`FAR_PLANE_REVERSED`]); `gdsky convert --reversed-z`. Only a literal changes value, so the
+/// module's validation info stays valid. Returns false when the module has no wrapper `vs_main`.
+pub fn set_far_plane_depth(module: &mut naga::Module, depth: f32) -> bool {
+    let Some(index) = module.entry_points.iter().position(|e| e.name == "vs_main") else {
+        return false;
+    };
+    let Some((_, z)) = vertex_depth(module) else {
+        return false;
+    };
+    let expressions = &mut module.entry_points[index].function.expressions;
+    match &mut expressions[z] {
+        E::Literal(Literal::F32(v)) => {
+            *v = depth;
+            true
+        }
+        _ => false,
+    }
+}
+
+/// `vs_main` and the z component of the position it returns.
+fn vertex_depth(module: &naga::Module) -> Option<(&naga::Function, Handle<E>)> {
+    let entry = module.entry_points.iter().find(|e| e.name == "vs_main" && e.stage == ShaderStage::Vertex)?;
+    let function = &entry.function;
+    let value = function.body.iter().find_map(|s| match s {
+        Statement::Return { value: Some(v) } => Some(*v),
+        _ => None,
+    })?;
+    match &function.expressions[value] {
+        E::Compose { components, .. } if components.len() == 4 => Some((function, components[2])),
+        _ => None,
+    }
+}
+
 fn vertex(lw: &mut Lowerer) {
     let sp = Span::UNDEFINED;
     let (Some(u32t), Some(v4)) = (
@@ -298,12 +348,15 @@ fn vertex(lw: &mut Lowerer) {
     let yf = b.expr(E::As { expr: yu, kind: naga::ScalarKind::Float, convert: Some(4) }, sp);
     let two = b.expr(E::Literal(Literal::F32(2.0)), sp);
     let one = b.expr(E::Literal(Literal::F32(1.0)), sp);
-    let zero = b.expr(E::Literal(Literal::F32(0.0)), sp);
+    // The sky lies on the far plane (w = 1, so this is the depth), as Godot draws it behind
+    // its geometry: a depth test against what was drawn first skips every covered pixel.
+    // Standard Z here; `set_far_plane_depth` switches the module to reversed Z.
+    let far = b.expr(E::Literal(Literal::F32(FAR_PLANE_STANDARD)), sp);
     let x2 = b.expr(E::Binary { op: Bo::Multiply, left: xf, right: two }, sp);
     let y2 = b.expr(E::Binary { op: Bo::Multiply, left: yf, right: two }, sp);
     let x = b.expr(E::Binary { op: Bo::Subtract, left: x2, right: one }, sp);
     let y = b.expr(E::Binary { op: Bo::Subtract, left: y2, right: one }, sp);
-    let pos = b.expr(E::Compose { ty: v4, components: vec![x, y, zero, one] }, sp);
+    let pos = b.expr(E::Compose { ty: v4, components: vec![x, y, far, one] }, sp);
     b.stmt(Statement::Return { value: Some(pos) }, sp);
     add_entry_point(lw, "vs_main", ShaderStage::Vertex, b);
 }
