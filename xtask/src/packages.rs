@@ -71,7 +71,11 @@ pub fn groups(task: Task, node_and_npm_on_path: bool) -> Vec<Group> {
     match task {
         Task::Demo => vec![VULKAN],
         Task::Test => {
-            let mut groups = vec![TOOLCHAIN, SPIRV_TOOLS, VULKAN, CHROMIUM];
+            let mut groups = vec![TOOLCHAIN, SPIRV_TOOLS, VULKAN];
+            // A Chromium the user points the oracle at (SKYORACLE_CHROMIUM) replaces Debian's.
+            if !std::env::var_os("SKYORACLE_CHROMIUM").is_some_and(|p| crate::is_executable(std::path::Path::new(&p))) {
+                groups.push(CHROMIUM);
+            }
             if !node_and_npm_on_path {
                 groups.push(NODE);
             }
@@ -94,6 +98,16 @@ pub fn missing<'a>(wanted: &[&'a str], dpkg_output: &str) -> Vec<&'a str> {
         })
         .collect();
     wanted.iter().copied().filter(|p| !installed.contains(p)).collect()
+}
+
+/// Whether `/etc/os-release`'s text names Ubuntu or a derivative of it.
+pub fn is_ubuntu(os_release: &str) -> bool {
+    os_release.lines().any(|line| {
+        let line = line.trim();
+        let value = |key: &str| line.strip_prefix(key).map(|v| v.trim_matches('"').to_ascii_lowercase());
+        value("ID=").is_some_and(|v| v == "ubuntu")
+            || value("ID_LIKE=").is_some_and(|v| v.split(' ').any(|w| w == "ubuntu"))
+    })
 }
 
 /// Makes sure every package `task` needs is installed, installing what is missing with one
@@ -124,6 +138,14 @@ pub fn ensure(task: Task) -> Result<(), Failure> {
         return Ok(());
     }
 
+    // Ubuntu has no `chromium` deb (its chromium-browser is a snap): say how to bring one.
+    if missing.contains(&"chromium") && is_ubuntu(&std::fs::read_to_string("/etc/os-release").unwrap_or_default()) {
+        return Err(Failure::env(
+            "Ubuntu ships Chromium only as a snap, which apt-get cannot install here: run \
+             `sudo snap install chromium`, then `SKYORACLE_CHROMIUM=/snap/bin/chromium cargo xtask test` \
+             (the oracle starts that executable instead of Debian's /usr/bin/chromium)",
+        ));
+    }
     let Some(apt_get) = find_on_path("apt-get") else {
         return Err(no_apt(
             &missing,
@@ -283,6 +305,13 @@ mod tests {
         for p in names(groups(Task::Test, false)) {
             assert!(!describe(p).is_empty(), "{p} has no description");
         }
+    }
+
+    #[test]
+    fn ubuntu_and_its_derivatives_are_recognised() {
+        assert!(is_ubuntu("NAME=\"Ubuntu\"\nID=ubuntu\nID_LIKE=debian\n"));
+        assert!(is_ubuntu("ID=pop\nID_LIKE=\"ubuntu debian\"\n"));
+        assert!(!is_ubuntu("PRETTY_NAME=\"Debian GNU/Linux 12 (bookworm)\"\nID=debian\n"));
     }
 
     #[test]
