@@ -19,6 +19,7 @@
 //! ```
 
 pub mod build;
+pub mod scene;
 
 pub use gdshader as frontend;
 pub use gdshader::{CheckedShader, Diagnostic, FrontendOutput, Severity, check_file, check_source};

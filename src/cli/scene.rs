@@ -105,74 +105,8 @@ impl SceneArgs {
     }
 }
 
-/// The range a number given on the command line must lie in, and the words for it.
-#[derive(Clone, Copy, Debug)]
-pub struct Range {
-    /// Lowest accepted value.
-    pub min: f64,
-    /// Highest accepted value.
-    pub max: f64,
-    /// `min` itself is refused (the range is open there).
-    pub min_open: bool,
-    /// `max` itself is refused.
-    pub max_open: bool,
-    /// How the accepted range reads in a message: `−90 to 90 degrees`.
-    pub text: &'static str,
-}
-
-impl Range {
-    /// A closed range `[min, max]`.
-    pub const fn closed(min: f64, max: f64, text: &'static str) -> Self {
-        Self { min, max, min_open: false, max_open: false, text }
-    }
-
-    /// Any value that rounds to a finite f32.
-    pub const fn f32_finite(text: &'static str) -> Self {
-        Self { min: -F32_LIMIT, max: F32_LIMIT, min_open: true, max_open: true, text }
-    }
-
-    fn contains(&self, v: f64) -> bool {
-        let above = if self.min_open { v > self.min } else { v >= self.min };
-        let below = if self.max_open { v < self.max } else { v <= self.max };
-        above && below
-    }
-}
-
-/// Where f64 values stop rounding to a finite f32 (exclusive): `f32::MAX` plus half its ulp.
-/// Values travel to the GPU as f32, and one at or beyond this would arrive as infinity; below
-/// it they round to at most `f32::MAX` (3.4028235e38, which is itself accepted).
-pub const F32_LIMIT: f64 = f32::MAX as f64 + (1u128 << 103) as f64;
-
-/// The sun's elevation: from straight down to straight up.
-pub const SUN_ELEVATION: Range = Range::closed(-90.0, 90.0, "−90 to 90 degrees");
-/// Angles around the vertical (the sun's azimuth, the camera's yaw): one turn either way.
-pub const TURN: Range = Range::closed(-360.0, 360.0, "−360 to 360 degrees");
-/// The camera's pitch: from straight down to straight up.
-pub const PITCH: Range = Range::closed(-90.0, 90.0, "−90 to 90 degrees");
-/// The camera's vertical field of view.
-pub const FOV: Range =
-    Range { min: 0.0, max: 180.0, min_open: true, max_open: true, text: "more than 0 and less than 180 degrees" };
-/// A coordinate of the camera's position, in metres.
-pub const POSITION: Range = Range::f32_finite("a finite f32, |v| ≤ 3.4028235e38 metres");
-/// TIME, in seconds.
-pub const TIME: Range = Range::f32_finite("a finite f32, |T| ≤ 3.4028235e38 seconds");
-
-/// Parses one number of a flag: refused, with the accepted range in the message, when it is not
-/// a number, not finite (`nan`, `inf`, `1e400`) or out of `range`. `what` names the component
-/// (`the azimuth`), empty for a single number. clap puts the flag's name in front.
-pub fn parse_number(text: &str, what: &str, range: &Range) -> Result<f64, String> {
-    let t = text.trim();
-    let what = if what.is_empty() { String::new() } else { format!(" ({what})") };
-    let accepted = range.text;
-    let v: f64 = t.parse().map_err(|_| format!("`{t}`{what} is not a number; accepted: {accepted}"))?;
-    if !v.is_finite() {
-        return Err(format!("`{t}`{what} is not a finite number; accepted: {accepted}"));
-    }
-    if !range.contains(v) {
-        return Err(format!("`{t}`{what} is out of range; accepted: {accepted}"));
-    }
-    Ok(v)
-}
+// The ranges and the number check are the library's, shared with scene files.
+pub use gdsky::scene::{F32_LIMIT, FOV, PITCH, POSITION, Range, SUN_ELEVATION, TIME, TURN, parse_number};
 
 /// Splits `N` comma-separated components.
 fn components<'a, const N: usize>(s: &'a str, names: &str) -> Result<[&'a str; N], String> {
