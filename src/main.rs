@@ -3,7 +3,7 @@
 
 mod cli;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 use std::process::ExitCode;
 
 /// Ports Godot 4 sky shaders to WGSL and SPIR-V, checks them with Godot's rules, renders them
@@ -91,11 +91,26 @@ enum Command {
     /// Freeman-compatible, or --quick found NaN/Inf at default uniforms, 2 no Vulkan adapter or an
     /// output cannot be written.
     Stress(cli::stress::StressArgs),
+    /// Render a scene file's sequence of frames (the sun over a day, TIME advancing, the camera
+    /// moving), re-rendering a frame only when an input the shader reads has changed.
+    ///
+    /// A frame is re-rendered when TIME (if the shader reads TIME), POSITION (if read), a light
+    /// it reads, the camera's orientation (camera projection only) or a uniform's value differs
+    /// from the last rendered frame; otherwise the previous frame's files are written again.
+    /// The cubemap projection emulates Godot's radiance process modes (real_time: all six faces;
+    /// incremental: one face a frame). Writes DIR/frame_NNNN.exr, DIR/frame_NNNN.png and
+    /// DIR/animate.csv, and prints frames rendered and reused and the time against rendering
+    /// every frame (measured in the same run). Exit status: 0 written, 1 the scene, the shader
+    /// or a flag is invalid, 2 no Vulkan adapter or a file cannot be read or written.
+    Animate(cli::animate::AnimateArgs),
 }
 
 fn main() -> ExitCode {
-    let cli = match Cli::try_parse() {
-        Ok(cli) => cli,
+    // The matches are kept: commands that read a scene file ask them which flags were given on
+    // the command line (those override the file) and which are defaults.
+    let parsed = Cli::command().try_get_matches().and_then(|m| Cli::from_arg_matches(&m).map(|cli| (cli, m)));
+    let (cli, matches) = match parsed {
+        Ok(parsed) => parsed,
         Err(err) => {
             let _ = err.print();
             // --help and --version are successes; a malformed command line is wrong input,
@@ -104,15 +119,17 @@ fn main() -> ExitCode {
             return if err.use_stderr() { ExitCode::from(1) } else { ExitCode::SUCCESS };
         }
     };
+    let sub = matches.subcommand().map(|(_, m)| m.clone()).unwrap_or_default();
     match cli.command {
         Command::Check(args) => cli::check::run(&args),
         Command::Convert(args) => cli::convert::run(&args),
-        Command::Render(args) => cli::render::run(&args),
+        Command::Render(args) => cli::render::run(&args, &sub),
         Command::Reference(args) => cli::render::run_reference(&args),
         Command::Compare(args) => cli::compare::run(&args),
         Command::Demo(args) => cli::demo::run(&args),
         Command::Oracle(args) => cli::oracle::run(&args),
         Command::Bench(args) => cli::bench::run(&args),
         Command::Stress(args) => cli::stress::run(&args),
+        Command::Animate(args) => cli::animate::run(&args, &sub),
     }
 }

@@ -1,4 +1,4 @@
-//! `gdsky convert FILE [-o DIR] [--set NAME=VALUE]...`
+//! `gdsky convert FILE|SCENE.toml [-o DIR] [--set NAME=VALUE]... [--bake-scene]`
 
 use clap::Args;
 use gdsky::frontend::diag::render_human;
@@ -9,9 +9,15 @@ use std::process::ExitCode;
 
 #[derive(Args)]
 pub struct ConvertArgs {
-    /// The sky shader (`.gdshader`) to convert.
-    #[arg(value_name = "FILE")]
+    /// The sky shader (`.gdshader`) to convert, or a scene file (`SCENE.toml`) whose shader to
+    /// convert (the bundled Freeman sky when it names none).
+    #[arg(value_name = "FILE|SCENE.toml")]
     file: PathBuf,
+    /// Bake every uniform the scene file fixes into the shader as constants (with `--set`
+    /// over them); with no scene file, every uniform at its default. The reflection's `baked`
+    /// lists them.
+    #[arg(long)]
+    bake_scene: bool,
     /// Directory to write `<stem>.wgsl`, `<stem>.spv` and `<stem>.json` into (created if missing;
     /// checked before converting).
     #[arg(short = 'o', long = "out-dir", value_name = "DIR", default_value = ".")]
@@ -28,31 +34,57 @@ pub struct ConvertArgs {
 
 pub fn run(args: &ConvertArgs) -> ExitCode {
     let color = std::io::stderr().is_terminal() && std::env::var_os("NO_COLOR").is_none();
-    let mut baked = HashMap::new();
+    let mut sets = Vec::new();
     for s in &args.set {
         let Some((name, value)) = s.split_once('=') else {
             eprintln!("error: `--set {s}`: expected NAME=VALUE");
             return ExitCode::from(1);
         };
-        baked.insert(name.trim().to_string(), value.trim().to_string());
+        sets.push((name.trim().to_string(), value.trim().to_string()));
     }
+    let input = match super::scene::open_input(Some(&args.file)) {
+        Ok(input) => input,
+        Err(code) => return code,
+    };
     // Where the outputs go is checked before any work: -o DIR is created when missing (from its
     // nearest existing ancestor), and none of the three files may be a directory or special file.
-    let stem = args.file.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "shader".into());
+    let stem = match &input.shader {
+        Some(path) => path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "shader".into()),
+        None => "freeman_sky".into(),
+    };
     let names = ["wgsl", "spv", "json"].map(|ext| format!("{stem}.{ext}"));
     if let Err(code) = super::check_output_dir(&args.out_dir, true, &names.each_ref().map(String::as_str)) {
         return code;
     }
-    let front = match gdsky::check_file(&args.file) {
-        Ok(f) => f,
-        Err(err) => {
-            eprintln!("error: cannot read {}: {err}", args.file.display());
-            return ExitCode::from(2);
-        }
+    let front = match &input.shader {
+        Some(path) => match gdsky::check_file(path) {
+            Ok(f) => f,
+            Err(err) => {
+                eprintln!("error: cannot read {}: {err}", path.display());
+                return ExitCode::from(2);
+            }
+        },
+        None => gdsky::check_source(
+            super::scene::BUNDLED_NAME,
+            super::scene::BUNDLED_FREEMAN.as_bytes().to_vec(),
+            None,
+            &mut gdsky::frontend::FsLoader,
+        ),
     };
     eprint!("{}", render_human(&front.db, &front.diagnostics, color));
     let Some(shader) = front.shader.as_ref() else {
         return ExitCode::from(1);
+    };
+    if let Some(scene) = &input.scene
+        && let Err(message) = scene.check_uniforms(shader)
+    {
+        eprint!("{message}");
+        return ExitCode::from(1);
+    }
+    let baked: HashMap<String, String> = if args.bake_scene {
+        gdsky::scene::bake_values(shader, input.scene.as_ref(), &sets)
+    } else {
+        sets.into_iter().collect()
     };
     let mut lowered = match gdsky_naga::lower_with(&front, &baked) {
         Ok(l) => l,

@@ -79,7 +79,7 @@ fn demo(out: &Path) -> Result<(), ExitCode> {
     progress.set_message("converting the bundled Freeman sky");
     let t = Instant::now();
     let loaded = load_shader(None)?;
-    let LoadedShader { front, lowered, wgsl } = &loaded;
+    let LoadedShader { front, lowered, wgsl, .. } = &loaded;
     let spirv = gdsky_naga::to_spirv(lowered).map_err(|err| {
         eprint!("{}", gdsky::frontend::diag::render_human(&front.db, &[err.diagnostic(front)], false));
         ExitCode::from(1)

@@ -1,5 +1,6 @@
 //! One module per subcommand, and what they share.
 
+pub mod animate;
 pub mod bench;
 pub mod check;
 pub mod compare;

@@ -1,18 +1,26 @@
 //! `gdsky render [FILE] -o OUT.exr …` and `gdsky reference -o OUT.exr … [--precision f32|f64]`.
 
-use super::scene::{SceneArgs, check_outputs, load_shader, open_gpu, set_freeman, strip, write_outputs};
+use super::scene::{
+    SceneArgs, check_outputs, check_scene_uniforms, load_shader_baking, open_gpu, open_input, set_freeman, strip,
+    write_outputs,
+};
 use super::usage;
-use clap::{Args, ValueEnum};
-use skyrun::{SkyBuiltins, material_with_defaults};
+use clap::{ArgMatches, Args, ValueEnum};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
 
 #[derive(Args)]
 pub struct RenderArgs {
-    /// The sky shader to render; without one, the bundled Freeman sky.
-    #[arg(value_name = "FILE")]
+    /// The sky shader (`.gdshader`) or a scene file (`SCENE.toml`: shader, uniforms, lights,
+    /// camera, projection, size, time; the flags given override it) to render; without one, the
+    /// bundled Freeman sky. Godot materials and scenes (`.tres`, `.tscn`) are not supported yet.
+    #[arg(value_name = "MATERIAL.tres | SCENE.tscn | SCENE.toml | FILE")]
     file: Option<PathBuf>,
+    /// Bake every uniform the scene file fixes (and every `--set`) into the shader as
+    /// constants; with no scene file, every uniform at its default.
+    #[arg(long)]
+    bake_scene: bool,
     /// The EXR to write: RGBA 32-bit float, scanline, row 0 at the top (replaced atomically; a
     /// symbolic link is written through to its target). Its directory must exist.
     #[arg(short = 'o', long = "out", value_name = "OUT.exr")]
@@ -24,27 +32,47 @@ pub struct RenderArgs {
     scene: SceneArgs,
 }
 
-pub fn run(args: &RenderArgs) -> ExitCode {
-    match render(args) {
+pub fn run(args: &RenderArgs, matches: &ArgMatches) -> ExitCode {
+    match render(args, matches) {
         Ok(()) => ExitCode::SUCCESS,
         Err(code) => code,
     }
 }
 
-fn render(args: &RenderArgs) -> Result<(), ExitCode> {
-    let (views, width, height) = args.scene.views().map_err(usage)?;
-    let overrides = args.scene.overrides().map_err(usage)?;
+fn render(args: &RenderArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
+    let input = open_input(args.file.as_deref())?;
+    let mut scene_args = args.scene.clone();
+    if let Some(file) = &input.scene {
+        scene_args.merge_file(file, matches);
+        warn_unapplied(file);
+    }
+    let (views, width, height) = scene_args.views().map_err(usage)?;
+    let overrides = scene_args.overrides().map_err(usage)?;
     check_outputs(&args.out, args.png.as_ref())?;
     let started = Instant::now();
-    let loaded = load_shader(args.file.as_deref())?;
+    let cli_sets = args.scene.overrides().map_err(usage)?;
+    let loaded = load_shader_baking(input.shader.as_deref(), |shader| {
+        if args.bake_scene {
+            gdsky::scene::bake_values(shader, input.scene.as_ref(), &cli_sets)
+        } else {
+            Default::default()
+        }
+    })?;
+    check_scene_uniforms(input.scene.as_ref(), &loaded)?;
+    if args.bake_scene {
+        let mut names: Vec<&String> = loaded.baked.keys().collect();
+        names.sort();
+        eprintln!(
+            "baked {} uniform(s): {}",
+            names.len(),
+            names.iter().map(|n| n.as_str()).collect::<Vec<_>>().join(", ")
+        );
+    }
     let convert_time = started.elapsed();
-    let shader_info = loaded.front.shader.as_ref().ok_or(ExitCode::from(1))?;
-    let material =
-        material_with_defaults(shader_info, &loaded.lowered, &overrides).map_err(|e| usage(format!("--set: {e}")))?;
+    let material = loaded.material(&overrides).map_err(|e| usage(format!("--set: {e}")))?;
     let gpu = open_gpu()?;
     let shader = loaded.compile(&gpu)?;
-    let mut builtins = SkyBuiltins::from_scene(&args.scene.scene(), width, height);
-    builtins.time = args.scene.time;
+    let builtins = scene_args.builtins(input.scene.as_ref(), width, height);
     let mut rendered = Vec::with_capacity(views.len());
     let mut gpu_time = std::time::Duration::ZERO;
     for view in views {
@@ -61,6 +89,23 @@ fn render(args: &RenderArgs) -> Result<(), ExitCode> {
     })?;
     eprintln!("convert {convert_time:.2?}, GPU {gpu_time:.2?}, total {:.2?}", started.elapsed());
     write_outputs(&image, &args.out, args.png.as_ref())
+}
+
+/// Says which keys of a scene file this command does not apply yet (the occluder and the sky
+/// resolution wait for their flags).
+pub fn warn_unapplied(file: &gdsky::scene::SceneFile) {
+    if file.occluder.is_some() {
+        eprintln!(
+            "warning: {}: `occluder` is read but not applied yet (no --occluder in this build)",
+            file.path.display()
+        );
+    }
+    if file.sky_resolution.is_some() {
+        eprintln!(
+            "warning: {}: `sky_resolution` is read but not applied yet (no --sky-resolution in this build)",
+            file.path.display()
+        );
+    }
 }
 
 /// Working precision of the CPU reference.

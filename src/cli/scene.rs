@@ -1,10 +1,12 @@
 //! What `render`, `reference` and `demo` share: the scene flags, loading a shader (or the
 //! bundled Freeman sky), and writing images.
 
-use clap::{Args, ValueEnum};
+use clap::{ArgMatches, Args, ValueEnum};
 use gdsky::frontend::diag::render_human;
+use gdsky::scene::{ProjectionKind, SceneError, SceneFile};
 use skyref::{Projection, Scene};
 use skyrun::Image;
+use std::collections::HashMap;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -91,6 +93,76 @@ impl SceneArgs {
                 None => Err(format!("`--set {s}`: expected NAME=VALUE")),
             })
             .collect()
+    }
+
+    /// Fills every scene flag not given on the command line from the scene file `file`; flags
+    /// given override it. `matches` are the subcommand's (clap's value source tells a flag given
+    /// from a default). The scene's uniforms come first in `--set`, so a `--set` of the same
+    /// uniform wins.
+    pub fn merge_file(&mut self, file: &SceneFile, matches: &ArgMatches) {
+        let given = |id: &str| {
+            matches.try_contains_id(id).unwrap_or(false)
+                && matches.value_source(id) == Some(clap::parser::ValueSource::CommandLine)
+        };
+        if !given("projection")
+            && let Some(p) = file.projection
+        {
+            self.projection = Some(match p {
+                ProjectionKind::Panorama => ProjectionArg::Panorama,
+                ProjectionKind::Camera => ProjectionArg::Camera,
+                ProjectionKind::Cubemap => ProjectionArg::Cubemap,
+            });
+        }
+        if !given("size") {
+            self.size = file.size.unwrap_or(self.size);
+        }
+        if !given("sun") {
+            self.sun = (file.sun_elevation.unwrap_or(self.sun.0), file.sun_azimuth.unwrap_or(self.sun.1));
+        }
+        if !given("no_light") {
+            self.no_light = file.sun_enabled.map_or(self.no_light, |on| !on);
+        }
+        if !given("position") {
+            self.position = file.position.map_or(self.position, |[x, y, z]| (x, y, z));
+        }
+        if !given("time") {
+            self.time = file.time.unwrap_or(self.time);
+        }
+        if !given("fov") {
+            self.fov = file.fov.unwrap_or(self.fov);
+        }
+        if !given("yaw") {
+            self.yaw = file.yaw.unwrap_or(self.yaw);
+        }
+        if !given("pitch") {
+            self.pitch = file.pitch.unwrap_or(self.pitch);
+        }
+        let mut set: Vec<String> = file.uniform_pairs().into_iter().map(|(n, v)| format!("{n}={v}")).collect();
+        set.append(&mut self.set);
+        self.set = set;
+    }
+
+    /// The built-ins of this scene for a `width`×`height` view: [`SkyBuiltins::from_scene`],
+    /// TIME, and from a scene file the sun's energy and colour and LIGHT1 … LIGHT3.
+    pub fn builtins(&self, file: Option<&SceneFile>, width: u32, height: u32) -> skyrun::SkyBuiltins {
+        let mut b = skyrun::SkyBuiltins::from_scene(&self.scene(), width, height);
+        b.time = self.time;
+        if let Some(file) = file {
+            b.lights[0].energy = file.sun_energy.unwrap_or(1.0);
+            b.lights[0].color = file.sun_color.unwrap_or([1.0; 3]);
+            for (slot, light) in b.lights[1..].iter_mut().zip(&file.lights) {
+                let dir = Scene { sun_elevation_deg: light.elevation, sun_azimuth_deg: light.azimuth, ..self.scene() }
+                    .light0_direction();
+                *slot = skyrun::SkyLight {
+                    direction: [dir.x as f32, dir.y as f32, dir.z as f32],
+                    energy: light.energy,
+                    color: light.color,
+                    size: 0.0,
+                    enabled: light.enabled,
+                };
+            }
+        }
+        b
     }
 
     /// The views to render: one projection, or the six cube faces; and the size of each.
@@ -190,9 +262,20 @@ pub struct LoadedShader {
     pub lowered: gdsky_naga::Lowered,
     /// Its WGSL.
     pub wgsl: String,
+    /// The uniforms baked into constants (`--bake-scene`), name → value.
+    pub baked: HashMap<String, String>,
 }
 
 impl LoadedShader {
+    /// The material block: the uniforms' defaults with `overrides` over them; overrides of
+    /// baked uniforms (already constants) are left out.
+    pub fn material(&self, overrides: &[(String, String)]) -> Result<Vec<u8>, skyrun::MaterialError> {
+        let shader = self.front.shader.as_ref().ok_or(skyrun::MaterialError::NoSuchUniform(String::new()))?;
+        let kept: Vec<(String, String)> =
+            overrides.iter().filter(|(n, _)| !self.baked.contains_key(n)).cloned().collect();
+        skyrun::material_with_defaults(shader, &self.lowered, &kept)
+    }
+
     /// The shader compiled on `gpu`, with Godot's sub-passes and default textures. Exit 1 when
     /// the harness cannot bind it.
     pub fn compile(&self, gpu: &skyrun::Gpu) -> Result<skyrun::SkyShader, ExitCode> {
@@ -207,9 +290,65 @@ impl LoadedShader {
     }
 }
 
+/// What a command's FILE argument names: a shader, or a scene file and its shader.
+pub struct Input {
+    /// The shader; `None`: the bundled Freeman sky.
+    pub shader: Option<PathBuf>,
+    /// The scene file, when FILE is one (`.toml`).
+    pub scene: Option<SceneFile>,
+}
+
+/// Opens FILE: a `.toml` is read as a scene file (its errors printed, located; exit 1 when it
+/// is wrong, 2 when it cannot be read), a `.tres`/`.tscn` is refused (not supported yet, exit
+/// 1), anything else is the shader.
+pub fn open_input(file: Option<&Path>) -> Result<Input, ExitCode> {
+    let Some(path) = file else {
+        return Ok(Input { shader: None, scene: None });
+    };
+    if gdsky::scene::is_godot_resource(path) {
+        return Err(super::usage(format!(
+            "{}: Godot materials and scenes (.tres, .tscn) are not supported yet; give a .gdshader or a scene \
+             file (.toml)",
+            path.display()
+        )));
+    }
+    if !gdsky::scene::is_scene_path(path) {
+        return Ok(Input { shader: Some(path.to_path_buf()), scene: None });
+    }
+    match SceneFile::load(path) {
+        Ok(scene) => Ok(Input { shader: scene.shader.clone(), scene: Some(scene) }),
+        Err(SceneError::Read(m)) => Err(super::environment(m)),
+        Err(SceneError::Invalid(m)) => {
+            eprint!("{m}");
+            Err(ExitCode::from(1))
+        }
+    }
+}
+
+/// Checks the scene file's uniforms against the loaded shader (exit 1, located, when one is
+/// not a uniform of it or its value does not fit).
+pub fn check_scene_uniforms(scene: Option<&SceneFile>, loaded: &LoadedShader) -> Result<(), ExitCode> {
+    let (Some(scene), Some(shader)) = (scene, loaded.front.shader.as_ref()) else {
+        return Ok(());
+    };
+    scene.check_uniforms(shader).map_err(|m| {
+        eprint!("{m}");
+        ExitCode::from(1)
+    })
+}
+
 /// Checks and lowers `file`, or the bundled Freeman sky when there is none. Diagnostics are
 /// printed; the error is the exit code (1 invalid, 2 unreadable).
 pub fn load_shader(file: Option<&Path>) -> Result<LoadedShader, ExitCode> {
+    load_shader_baking(file, |_| HashMap::new())
+}
+
+/// [`load_shader`], baking the uniforms `bake` picks from the checked shader (name → value in
+/// `--set` syntax) into constants; [`LoadedShader::baked`] lists them.
+pub fn load_shader_baking(
+    file: Option<&Path>,
+    bake: impl FnOnce(&gdsky::CheckedShader) -> HashMap<String, String>,
+) -> Result<LoadedShader, ExitCode> {
     let color = std::io::stderr().is_terminal() && std::env::var_os("NO_COLOR").is_none();
     let front = match file {
         Some(path) => gdsky::check_file(path).map_err(|err| {
@@ -224,7 +363,8 @@ pub fn load_shader(file: Option<&Path>) -> Result<LoadedShader, ExitCode> {
     if front.shader.is_none() {
         return Err(ExitCode::from(1));
     }
-    let lowered = gdsky_naga::lower(&front).map_err(|diags| {
+    let baked = front.shader.as_ref().map(bake).unwrap_or_default();
+    let lowered = gdsky_naga::lower_with(&front, &baked).map_err(|diags| {
         eprint!("{}", render_human(&front.db, &diags, color));
         ExitCode::from(1)
     })?;
@@ -232,7 +372,7 @@ pub fn load_shader(file: Option<&Path>) -> Result<LoadedShader, ExitCode> {
         eprint!("{}", render_human(&front.db, &[err.diagnostic(&front)], color));
         ExitCode::from(1)
     })?;
-    Ok(LoadedShader { front, lowered, wgsl })
+    Ok(LoadedShader { front, lowered, wgsl, baked })
 }
 
 /// Opens the best Vulkan adapter and says which one, or explains why there is none (exit 2).
