@@ -8,6 +8,8 @@
 //! * `lower/` walks the checked tree and builds the module (see its essay for the semantics
 //!   written out explicitly: floored `mod`, NaN-proof `max`/`min`/`clamp`, lazy `&&`/`?:`,
 //!   copy-in/copy-out `out` arguments, `bool` uniforms as `u32`).
+//! * `opt/` removes what no entry point needs (unreachable functions, unused constants and
+//!   values) before validation; see its essay for what the lowering itself leaves out.
 //! * `wrapper.rs` adds Godot's sky wrapper: the built-ins uniform (group 0), per-pixel
 //!   built-ins, the fullscreen-triangle vertex entry and one fragment entry per projection.
 //!
@@ -17,6 +19,7 @@
 
 mod emit;
 mod lower;
+mod opt;
 pub mod reflect;
 pub mod wrapper;
 
@@ -114,6 +117,11 @@ pub fn lower_with(front: &FrontendOutput, baked: &HashMap<String, String>) -> Re
     let material_size = lw.material_size;
     let textures = lw.textures;
     let module = lw.module;
+    let module = {
+        let mut module = module;
+        opt::optimize(&mut module);
+        module
+    };
     let info = validate(front, &module).map_err(|d| vec![d])?;
     Ok(Lowered { module, info, uniforms, material_size, textures })
 }

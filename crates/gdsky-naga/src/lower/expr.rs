@@ -38,6 +38,9 @@ enum LocalSlot {
     Argument(u32),
     /// A sampler parameter: texture argument `index`, its sampler at `index + 1`.
     Sampler(u32, gdshader::check::types::SamplerKind, GdScalar),
+    /// A local the function never assigns after its initializer: the initializer's value (a
+    /// WGSL `let`), so no variable, store or load is emitted for it.
+    Let(H),
 }
 
 /// Lowers the body of one function.
@@ -45,6 +48,9 @@ pub(crate) struct FnCtx<'l, 'a> {
     pub lw: &'l mut Lowerer<'a>,
     ret: GdType,
     scopes: Vec<HashMap<String, LocalSlot>>,
+    /// Names the body writes anywhere (see [`assigned_names`]); a declared local not among them
+    /// is a `let`.
+    assigned: std::collections::HashSet<String>,
 }
 
 const COMPONENTS: [SwizzleComponent; 4] =
@@ -79,7 +85,7 @@ pub(super) fn has_side_effects(lw: &Lowerer, e: &Expr) -> bool {
 
 impl<'l, 'a> FnCtx<'l, 'a> {
     pub fn new(lw: &'l mut Lowerer<'a>, ret: GdType) -> Self {
-        FnCtx { lw, ret, scopes: vec![HashMap::new()] }
+        FnCtx { lw, ret, scopes: vec![HashMap::new()], assigned: Default::default() }
     }
 
     pub fn return_type(&self) -> &GdType {
@@ -108,6 +114,7 @@ impl<'l, 'a> FnCtx<'l, 'a> {
                 })
         };
         assigned_names(&f.body.stmts, &is_out, &mut assigned);
+        self.assigned = assigned.iter().map(|s| s.to_string()).collect();
         let mut next_arg = 0u32;
         for (p, (ty, q)) in f.params.iter().zip(params) {
             let sp = span(p.name.span);
@@ -147,6 +154,25 @@ impl<'l, 'a> FnCtx<'l, 'a> {
         let ptr = b.local(Some(&name.name), th, span(name.span));
         self.declare(&name.name, LocalSlot::Variable(ptr));
         Some(ptr)
+    }
+
+    /// Declares `name` as the value `v` when the body never writes it and it is a scalar, a
+    /// vector or a matrix (arrays and structs stay variables: they are indexed through a
+    /// pointer). Returns false when `name` must be a variable.
+    pub fn declare_let(&mut self, b: &mut FnBuilder, name: &ast::Ident, ty: &GdType, v: H) -> bool {
+        if self.assigned.contains(&name.name)
+            || !matches!(ty, GdType::Scalar(_) | GdType::Vector(..) | GdType::Matrix(_))
+        {
+            return false;
+        }
+        if b.known(v).is_none()
+            && !b.function.expressions[v].needs_pre_emit()
+            && !b.function.named_expressions.contains_key(&v)
+        {
+            b.function.named_expressions.insert(v, name.name.clone());
+        }
+        self.declare(&name.name, LocalSlot::Let(v));
+        true
     }
 
     /// A sampler expression (a sampler uniform, an element of a sampler array by a literal index,
@@ -357,6 +383,7 @@ impl<'l, 'a> FnCtx<'l, 'a> {
                 LocalSlot::Variable(ptr) => Val::Pointer(ptr),
                 LocalSlot::OutParam(i) => Val::Pointer(b.expr(E::FunctionArgument(i), sp)),
                 LocalSlot::Argument(i) => Val::Value(b.expr(E::FunctionArgument(i), sp)),
+                LocalSlot::Let(h) => Val::Value(h),
                 LocalSlot::Sampler(..) => {
                     return self.unsupported(
                         e,

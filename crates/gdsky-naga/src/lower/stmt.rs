@@ -7,9 +7,10 @@
 
 use super::builder::FnBuilder;
 use super::expr::FnCtx;
+use super::fold::Value;
 use super::span;
 use gdshader::parse::ast::{self, Stmt, StmtKind};
-use naga::{Block, Expression as E, Statement, SwitchCase, SwitchValue, UnaryOperator};
+use naga::{Block, Expression as E, Literal, Statement, SwitchCase, SwitchValue, UnaryOperator};
 
 impl FnCtx<'_, '_> {
     /// Lowers statements in a new scope. Statements after a `return`, `break`, `continue` or
@@ -66,6 +67,11 @@ impl FnCtx<'_, '_> {
                     // A failed initializer (already reported) still declares the name, so its
                     // uses are not reported again.
                     let init = d.init.as_ref().and_then(|init| self.initial_value(b, init, &ty));
+                    if let Some(v) = init
+                        && self.declare_let(b, &d.name, &ty, v)
+                    {
+                        continue;
+                    }
                     let Some(ptr) = self.declare_variable(b, &d.name, &ty) else {
                         continue;
                     };
@@ -138,19 +144,48 @@ impl FnCtx<'_, '_> {
 
     /// `if … else if … else …`: each condition is evaluated in the `else` block of the one
     /// before, so the chain nests in naga while staying flat (and iterative) here.
+    ///
+    /// A condition the folder knows (a baked `bool` uniform, a comparison of baked values, a
+    /// literal) decides at translation time: a false one drops its branch, a true one makes its
+    /// branch the chain's last `else` and drops what follows (specialization, issue #11).
     fn if_chain(&mut self, b: &mut FnBuilder, branches: &[(ast::Expr, Stmt)], otherwise: Option<&Stmt>) {
         let mut pending = Vec::new();
-        for (i, (cond, body)) in branches.iter().enumerate() {
-            if i > 0 {
+        // Whether the innermost open block is the `else` of the last pending `if`.
+        let mut else_open = false;
+        let mut tail = otherwise;
+        for (cond, body) in branches {
+            if !pending.is_empty() && !else_open {
                 b.open();
+                else_open = true;
             }
             let Some(c) = self.value(b, cond) else { return };
+            match b.known(c) {
+                Some(Value::Scalar(Literal::Bool(true))) => {
+                    tail = Some(body);
+                    break;
+                }
+                Some(Value::Scalar(Literal::Bool(false))) => continue,
+                _ => {}
+            }
             let accept = self.nested(b, Self::stmt_as_slice(body));
             pending.push((c, accept, span(cond.span)));
+            else_open = false;
         }
-        let mut reject = match otherwise {
-            Some(o) => self.nested(b, Self::stmt_as_slice(o)),
-            None => Block::new(),
+        if pending.is_empty() {
+            if let Some(t) = tail {
+                let block = self.nested(b, Self::stmt_as_slice(t));
+                b.stmt(Statement::Block(block), span(t.span));
+            }
+            return;
+        }
+        let mut reject = match (tail, else_open) {
+            (Some(t), true) => {
+                self.block(b, Self::stmt_as_slice(t));
+                b.close()
+            }
+            (None, true) => b.close(),
+            (Some(t), false) => self.nested(b, Self::stmt_as_slice(t)),
+            (None, false) => Block::new(),
         };
         while let Some((condition, accept, sp)) = pending.pop() {
             b.stmt(Statement::If { condition, accept, reject }, sp);

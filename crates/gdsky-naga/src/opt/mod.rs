@@ -1,0 +1,34 @@
+//! # Optimizing: skip what the scene does not need
+//!
+//! The lowering (`lower/`) writes what the shader says, in the order it says it; this stage,
+//! run on the module after lowering and before validation ([`crate::lower_with`], so every
+//! caller — `convert`, `render`, the benches, build scripts and tests — gets it), removes what no
+//! entry point needs. It never changes a value the shader computes: the images of the Freeman
+//! sky stay bit-identical to the hand-written port (`crates/skyrun/tests/hand_port.rs`).
+//!
+//! * **Pruning** (`prune.rs`): functions no entry point calls are dropped; constants no function
+//!   reads lose their name, so that naga's compaction (`naga::compact::compact` with
+//!   `KeepUnused::Yes`) drops them with the anonymous types and the expressions nothing uses —
+//!   a value the source computes and never reads leaves no code. Global variables stay: each is
+//!   a binding a host may set (built-ins read by no code were never declared: the wrapper only
+//!   declares the per-pixel built-ins the shader uses and loads fields of the built-ins block
+//!   only where they are read).
+//!
+//! Parts of the clean-up live where the information is, in the lowering:
+//!
+//! * a local the function never writes after its initializer (no assignment, `++`/`--`, or
+//!   `out` argument names it) is a named value, a WGSL `let`, not a `var` with a store and loads
+//!   (`FnCtx::declare_let`); a constant initializer keeps folding through it, which is what
+//!   makes a baked uniform (`--set`) fold on through the locals computed from it;
+//! * `max`/`min`/`clamp` with an operand that is a constant other than NaN (a literal, a folded
+//!   constant, a baked uniform) is one comparison and one select instead of two NaN bit tests
+//!   around `max`, with the same IEEE maxNum result (`calls.rs`, `max_num`);
+//! * an `if` on a constant condition (a baked `bool`, a comparison of baked values) lowers only
+//!   the branch taken (`stmt.rs`).
+
+mod prune;
+
+/// Runs every pass on a lowered module.
+pub fn optimize(module: &mut naga::Module) {
+    prune::prune(module);
+}
