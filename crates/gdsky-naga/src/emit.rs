@@ -78,16 +78,165 @@ impl EmitError {
 /// Writes the module as WGSL, then re-reads that text with naga's WGSL front end and validates
 /// the result: only text that round-trips comes back.
 pub fn to_wgsl(lowered: &Lowered) -> Result<String, EmitError> {
-    let text = naga::back::wgsl::write_string(&lowered.module, &lowered.info, naga::back::wgsl::WriterFlags::empty())
-        .map_err(|e| EmitError {
-        format: "WGSL",
-        message: format!("naga's WGSL writer failed: {e}"),
-        reread: false,
-        span: None,
-        function: None,
-    })?;
+    let module = with_shallow_expressions(&lowered.module, &lowered.info);
+    let text = naga::back::wgsl::write_string(&module, &lowered.info, naga::back::wgsl::WriterFlags::empty()).map_err(
+        |e| EmitError {
+            format: "WGSL",
+            message: format!("naga's WGSL writer failed: {e}"),
+            reread: false,
+            span: None,
+            function: None,
+        },
+    )?;
     reread_wgsl(&lowered.module, &text)?;
     Ok(text)
+}
+
+/// How deep one expression may nest in WGSL text before it is given a name (`let`). naga's WGSL
+/// parser stops at 200 levels of recursion, shared between nested statements (at most
+/// [`MAX_WGSL_BRACES`]) and the expression being parsed; naga's writer prints an expression used
+/// once inline, so a long chain such as `a + a + … + a` would print as one deeply parenthesised
+/// expression. 32 leaves room for the deepest statement nesting.
+const MAX_INLINE_DEPTH: u32 = 32;
+
+/// How deep braces may nest in WGSL: naga's WGSL front end refuses more than 127 (the minimum
+/// the WGSL specification requires implementations to support).
+pub const MAX_WGSL_BRACES: usize = 127;
+
+/// A copy of `module` in which every expression that would print nested deeper than
+/// [`MAX_INLINE_DEPTH`] has a name, so naga's WGSL writer gives it a `let` of its own. Names do
+/// not change the module's meaning or its validation info.
+fn with_shallow_expressions<'m>(
+    module: &'m naga::Module,
+    info: &naga::valid::ModuleInfo,
+) -> std::borrow::Cow<'m, naga::Module> {
+    let deep =
+        |function: &naga::Function, fun_info: &naga::valid::FunctionInfo| -> Vec<naga::Handle<naga::Expression>> {
+            // The arena lists operands before their users, so one pass computes every depth.
+            let mut depth = vec![1u32; function.expressions.len()];
+            let mut named = Vec::new();
+            for (h, expression) in function.expressions.iter() {
+                let inline = |o: &naga::Handle<naga::Expression>| {
+                    // Named or used more than once: printed as a name, depth 1.
+                    let printed_by_name = function.named_expressions.contains_key(o) || fun_info[*o].ref_count > 1;
+                    if printed_by_name { 1 } else { depth[o.index()] }
+                };
+                let d = 1 + operands(expression).iter().map(inline).max().unwrap_or(0);
+                let value = !matches!(
+                    fun_info[h].ty.inner_with(&module.types),
+                    naga::TypeInner::Pointer { .. } | naga::TypeInner::ValuePointer { .. }
+                );
+                if d > MAX_INLINE_DEPTH && value && is_emitted(expression) {
+                    named.push(h);
+                    depth[h.index()] = 1;
+                } else {
+                    depth[h.index()] = d;
+                }
+            }
+            named
+        };
+    let per_function: Vec<_> = module.functions.iter().map(|(h, f)| deep(f, &info[h])).collect();
+    let per_entry: Vec<_> =
+        module.entry_points.iter().enumerate().map(|(i, e)| deep(&e.function, info.get_entry_point(i))).collect();
+    if per_function.iter().chain(&per_entry).all(Vec::is_empty) {
+        return std::borrow::Cow::Borrowed(module);
+    }
+    let mut copy = module.clone();
+    let functions =
+        copy.functions.iter_mut().map(|(_, f)| f).chain(copy.entry_points.iter_mut().map(|e| &mut e.function));
+    for (function, named) in functions.zip(per_function.iter().chain(&per_entry)) {
+        for &h in named {
+            function.named_expressions.insert(h, format!("part{}", h.index()));
+        }
+    }
+    std::borrow::Cow::Owned(copy)
+}
+
+/// Whether naga covers `expression` with an `Emit` statement (only such expressions can be
+/// named into a `let`; literals, constants, variables, arguments and call results print as
+/// themselves).
+fn is_emitted(expression: &naga::Expression) -> bool {
+    use naga::Expression as E;
+    !matches!(
+        expression,
+        E::Literal(_)
+            | E::Constant(_)
+            | E::Override(_)
+            | E::ZeroValue(_)
+            | E::FunctionArgument(_)
+            | E::GlobalVariable(_)
+            | E::LocalVariable(_)
+            | E::CallResult(_)
+            | E::AtomicResult { .. }
+            | E::WorkGroupUniformLoadResult { .. }
+            | E::RayQueryProceedResult
+            | E::SubgroupBallotResult
+            | E::SubgroupOperationResult { .. }
+    )
+}
+
+/// The expressions `expression` reads.
+fn operands(expression: &naga::Expression) -> Vec<naga::Handle<naga::Expression>> {
+    use naga::Expression as E;
+    match *expression {
+        E::Access { base, index } => vec![base, index],
+        E::AccessIndex { base, .. } => vec![base],
+        E::Splat { value, .. } => vec![value],
+        E::Swizzle { vector, .. } => vec![vector],
+        E::Compose { ref components, .. } => components.clone(),
+        E::Load { pointer } => vec![pointer],
+        E::ImageSample { image, sampler, coordinate, array_index, offset, depth_ref, .. } => {
+            [Some(image), Some(sampler), Some(coordinate), array_index, offset, depth_ref]
+                .into_iter()
+                .flatten()
+                .collect()
+        }
+        E::ImageLoad { image, coordinate, array_index, sample, level } => {
+            [Some(image), Some(coordinate), array_index, sample, level].into_iter().flatten().collect()
+        }
+        E::ImageQuery { image, .. } => vec![image],
+        E::Unary { expr, .. } => vec![expr],
+        E::Binary { left, right, .. } => vec![left, right],
+        E::Select { condition, accept, reject } => vec![condition, accept, reject],
+        E::Derivative { expr, .. } => vec![expr],
+        E::Relational { argument, .. } => vec![argument],
+        E::Math { arg, arg1, arg2, arg3, .. } => [Some(arg), arg1, arg2, arg3].into_iter().flatten().collect(),
+        E::As { expr, .. } => vec![expr],
+        E::ArrayLength(e) => vec![e],
+        _ => Vec::new(),
+    }
+}
+
+/// The first statement of `module` that opens braces deeper than WGSL allows
+/// ([`MAX_WGSL_BRACES`]), with its span: such a shader cannot be written as WGSL.
+pub fn too_deep_for_wgsl(module: &naga::Module) -> Option<naga::Span> {
+    fn block(b: &naga::Block, depth: usize) -> Option<naga::Span> {
+        for (statement, span) in b.span_iter() {
+            use naga::Statement as S;
+            // `depth` counts the braces this block sits in; a statement's own blocks open more:
+            // one for `if`, `loop` and a bare block, two for `continuing` (inside the loop's)
+            // and for a `switch` case (inside the switch's).
+            let inner: Vec<(&naga::Block, usize)> = match statement {
+                S::Block(inner) => vec![(inner, 1)],
+                S::If { accept, reject, .. } => vec![(accept, 1), (reject, 1)],
+                S::Loop { body, continuing, .. } => vec![(body, 1), (continuing, 2)],
+                S::Switch { cases, .. } => cases.iter().map(|c| (&c.body, 2)).collect(),
+                _ => Vec::new(),
+            };
+            for (inner, opens) in inner {
+                if depth + opens > MAX_WGSL_BRACES {
+                    return Some(*span);
+                }
+                if let Some(found) = block(inner, depth + opens) {
+                    return Some(found);
+                }
+            }
+        }
+        None
+    }
+    let bodies =
+        module.functions.iter().map(|(_, f)| &f.body).chain(module.entry_points.iter().map(|e| &e.function.body));
+    bodies.into_iter().find_map(|body| block(body, 1))
 }
 
 /// Re-reads emitted WGSL with naga's front end and validator; an error names the function of

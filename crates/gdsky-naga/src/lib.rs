@@ -74,6 +74,26 @@ pub fn lower(front: &FrontendOutput) -> Result<Lowered, Vec<Diagnostic>> {
 /// Like [`lower`], with uniforms baked into constants: `baked` maps a uniform's name to the text
 /// of its value (`1.5`, `24`, `true`, `0.1,0.2,0.3`), as `gdsky convert --set` takes it.
 pub fn lower_with(front: &FrontendOutput, baked: &HashMap<String, String>) -> Result<Lowered, Vec<Diagnostic>> {
+    // The lowering recurses over the expression tree, which the front end lets grow to
+    // `MAX_EXPR_DEPTH` (a chain of 2,048 operators): it gets the front end's deep stack rather
+    // than whatever thread called it (a test thread has 2 MiB).
+    std::thread::scope(|scope| {
+        std::thread::Builder::new()
+            .stack_size(LOWERING_STACK_BYTES)
+            .spawn_scoped(scope, || lower_here(front, baked))
+            .map_err(|e| vec![Diagnostic::error(UNSUPPORTED, format!("cannot start the lowering's thread: {e}"))])?
+            .join()
+            .map_err(|_| {
+                vec![Diagnostic::error(INVALID_MODULE, "the lowering panicked: a bug in gdsky; please report it")]
+            })?
+    })
+}
+
+/// Stack of the lowering's thread: like the front end's, enough for its deepest expression in an
+/// unoptimised build, with a wide margin (only the pages touched are ever mapped).
+const LOWERING_STACK_BYTES: usize = 256 << 20;
+
+fn lower_here(front: &FrontendOutput, baked: &HashMap<String, String>) -> Result<Lowered, Vec<Diagnostic>> {
     let Some(shader) = front.shader.as_ref() else {
         return Err(front.diagnostics.clone());
     };
@@ -117,6 +137,14 @@ pub fn lower_with(front: &FrontendOutput, baked: &HashMap<String, String>) -> Re
     let material_size = lw.material_size;
     let textures = lw.textures;
     let module = lw.module;
+    if let Some(span) = emit::too_deep_for_wgsl(&module).and_then(|s| s.to_range()) {
+        let (file, range) = front.locate(ast::Span::new(span.start, span.end));
+        return Err(vec![
+            Diagnostic::error(UNSUPPORTED, "this statement nests blocks deeper than WGSL allows")
+                .with_primary(file, range, "")
+                .with_note(format!("WGSL (naga's front end) accepts at most {} nested braces", emit::MAX_WGSL_BRACES)),
+        ]);
+    }
     let module = {
         let mut module = module;
         opt::optimize(&mut module);
