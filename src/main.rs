@@ -128,7 +128,7 @@ fn main() -> ExitCode {
         Command::Compare(args) => cli::compare::run(&args),
         Command::Demo(args) => cli::demo::run(&args),
         Command::Oracle(args) => cli::oracle::run(&args),
-        Command::Bench(args) => cli::bench::run(&args),
+        Command::Bench(args) => cli::bench::run(&args, &sub),
         Command::Stress(args) => cli::stress::run(&args),
         Command::Animate(args) => cli::animate::run(&args, &sub),
     }

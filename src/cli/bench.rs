@@ -17,10 +17,12 @@
 //! exactly, its pixels match the checksum recorded with them, and a few pixels recomputed now
 //! match it bit for bit. Anything else is recomputed.
 
-use super::scene::{ProjectionArg, SceneArgs, open_gpu, set_freeman, strip};
+use super::scene::{
+    LoadedShader, ProjectionArg, SceneArgs, check_scene_uniforms, open_gpu, open_input, set_freeman, strip,
+};
 use super::sweep::{self, ErrorStats};
 use super::{environment, usage};
-use clap::Args;
+use clap::{ArgMatches, Args};
 use plotters::prelude::*;
 use skyref::converged::Converged;
 use skyref::{FreemanParams, Projection, Scene, UniformMut};
@@ -36,10 +38,16 @@ const SUN_SAMPLES: [i32; 4] = [2, 4, 8, 16];
 
 #[derive(Args)]
 pub struct BenchArgs {
-    /// The sky shader to benchmark (Freeman-compatible: the Freeman sky's uniforms); without
-    /// one, the bundled Freeman sky.
-    #[arg(value_name = "FILE")]
+    /// The sky shader to benchmark (Freeman-compatible: the Freeman sky's uniforms), or a scene
+    /// file (`SCENE.toml`: its shader, uniforms, sun, camera, projection, size and time; the
+    /// flags given override it); without one, the bundled Freeman sky.
+    #[arg(value_name = "FILE|SCENE.toml")]
     file: Option<PathBuf>,
+    /// Bake every uniform the scene file fixes (and every `--set`) into the shader as
+    /// constants, except the swept knobs; with no scene file, every uniform but the knobs at its
+    /// default.
+    #[arg(long)]
+    bake_scene: bool,
     /// Folder for bench.csv and bench.png (created if missing; checked before any work).
     #[arg(short = 'o', long = "out-dir", value_name = "DIR", default_value = "out/bench")]
     out_dir: PathBuf,
@@ -99,8 +107,8 @@ struct Row {
     pareto: bool,
 }
 
-pub fn run(args: &BenchArgs) -> ExitCode {
-    match bench(args) {
+pub fn run(args: &BenchArgs, matches: &ArgMatches) -> ExitCode {
+    match bench(args, matches) {
         Ok(()) => ExitCode::SUCCESS,
         Err(code) => code,
     }
@@ -167,7 +175,47 @@ fn with_knobs(base: &FreemanParams, knobs: &[Knob], values: &[i32]) -> Result<Fr
     Ok(params)
 }
 
-fn bench(args: &BenchArgs) -> Result<(), ExitCode> {
+/// The material block of a Freeman-compatible shader from skyref's parameters, leaving out the
+/// uniforms baked into constants.
+fn material(loaded: &LoadedShader, params: &FreemanParams) -> Result<Vec<u8>, skyrun::MaterialError> {
+    if loaded.baked.is_empty() {
+        return sweep::material(loaded, params);
+    }
+    let values: Vec<_> =
+        skyrun::freeman_values(params).into_iter().filter(|(name, _)| !loaded.baked.contains_key(*name)).collect();
+    skyrun::material_bytes(&loaded.lowered, &values)
+}
+
+/// A uniform value in `--set` syntax.
+fn uniform_text(value: skyrun::UniformValue) -> String {
+    use skyrun::UniformValue as U;
+    let join = |v: &[f32]| v.iter().map(|c| format!("{c:?}")).collect::<Vec<_>>().join(",");
+    match value {
+        U::Float(v) => format!("{v:?}"),
+        U::Int(v) => v.to_string(),
+        U::UInt(v) => v.to_string(),
+        U::Bool(v) => v.to_string(),
+        U::Vec2(v) => join(&v),
+        U::Vec3(v) => join(&v),
+        U::Vec4(v) => join(&v),
+    }
+}
+
+fn bench(args: &BenchArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
+    let input = open_input(args.file.as_deref())?;
+    let mut scene_args = args.scene.clone();
+    if let Some(file) = &input.scene {
+        scene_args.merge_file(file, matches);
+        super::render::warn_unapplied(file);
+    }
+    let args = &BenchArgs {
+        file: input.shader.clone(),
+        scene: scene_args,
+        knobs: args.knobs.clone(),
+        out_dir: args.out_dir.clone(),
+        cache_dir: args.cache_dir.clone(),
+        ..*args
+    };
     let (views, width, height) = args.scene.views().map_err(usage)?;
     let mut base = FreemanParams::default();
     set_freeman(&mut base, &args.scene.overrides().map_err(usage)?).map_err(usage)?;
@@ -177,7 +225,33 @@ fn bench(args: &BenchArgs) -> Result<(), ExitCode> {
         return Err(usage("the sweep is empty"));
     }
     super::check_output_dir(&args.out_dir, true, &["bench.csv", "bench.png"])?;
-    let loaded = sweep::load_freeman(args.file.as_deref())?;
+    let mut loaded = sweep::load_freeman(args.file.as_deref())?;
+    check_scene_uniforms(input.scene.as_ref(), &loaded)?;
+    if args.bake_scene {
+        // The values baked are the ones the material would carry (skyref's defaults with the
+        // scene's uniforms and --set over them), so the truth still matches: with a scene file,
+        // the uniforms it fixes and those --set; without one, every uniform; never a knob.
+        let cli_sets = super::scene::SceneArgs::overrides(&args.scene).map_err(usage)?;
+        let fixed: Vec<String> = match &input.scene {
+            Some(file) => {
+                file.uniform_pairs().into_iter().map(|(n, _)| n).chain(cli_sets.into_iter().map(|(n, _)| n)).collect()
+            }
+            None => sweep::freeman_names().into_iter().map(String::from).collect(),
+        };
+        let baked: std::collections::HashMap<String, String> = skyrun::freeman_values(&base)
+            .into_iter()
+            .filter(|(name, _)| fixed.iter().any(|f| f == name) && !knobs.iter().any(|k| k.name == *name))
+            .map(|(name, value)| (name.to_string(), uniform_text(value)))
+            .collect();
+        let mut names: Vec<&String> = baked.keys().collect();
+        names.sort();
+        eprintln!(
+            "baked {} uniform(s): {}",
+            names.len(),
+            names.iter().map(|n| n.as_str()).collect::<Vec<_>>().join(", ")
+        );
+        loaded.rebake(baked)?;
+    }
     let shader_name = args.file.as_ref().map(|f| f.display().to_string()).unwrap_or("freeman_sky (bundled)".into());
     let gpu = open_gpu()?;
     let adapter = gpu.adapter_info();
@@ -214,9 +288,7 @@ fn bench(args: &BenchArgs) -> Result<(), ExitCode> {
 
     let materials: Vec<Vec<u8>> = configs
         .iter()
-        .map(|values| {
-            with_knobs(&base, &knobs, values).and_then(|p| sweep::material(&loaded, &p).map_err(|e| e.to_string()))
-        })
+        .map(|values| with_knobs(&base, &knobs, values).and_then(|p| material(&loaded, &p).map_err(|e| e.to_string())))
         .collect::<Result<_, _>>()
         .map_err(usage)?;
     let label = |values: &[i32]| values.iter().map(i32::to_string).collect::<Vec<_>>().join("/");

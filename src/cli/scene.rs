@@ -364,15 +364,36 @@ pub fn load_shader_baking(
         return Err(ExitCode::from(1));
     }
     let baked = front.shader.as_ref().map(bake).unwrap_or_default();
-    let lowered = gdsky_naga::lower_with(&front, &baked).map_err(|diags| {
+    let (lowered, wgsl) = lower_and_emit(&front, &baked)?;
+    Ok(LoadedShader { front, lowered, wgsl, baked })
+}
+
+/// Lowers a checked shader with `baked` uniforms as constants and emits its WGSL; diagnostics
+/// printed, exit 1.
+fn lower_and_emit(
+    front: &gdsky::FrontendOutput,
+    baked: &HashMap<String, String>,
+) -> Result<(gdsky_naga::Lowered, String), ExitCode> {
+    let color = std::io::stderr().is_terminal() && std::env::var_os("NO_COLOR").is_none();
+    let lowered = gdsky_naga::lower_with(front, baked).map_err(|diags| {
         eprint!("{}", render_human(&front.db, &diags, color));
         ExitCode::from(1)
     })?;
     let wgsl = gdsky_naga::to_wgsl(&lowered).map_err(|err| {
-        eprint!("{}", render_human(&front.db, &[err.diagnostic(&front)], color));
+        eprint!("{}", render_human(&front.db, &[err.diagnostic(front)], color));
         ExitCode::from(1)
     })?;
-    Ok(LoadedShader { front, lowered, wgsl, baked })
+    Ok((lowered, wgsl))
+}
+
+impl LoadedShader {
+    /// Lowers the shader again with `baked` uniforms as constants (`--bake-scene` of `bench`,
+    /// after the Freeman-compatibility check). Exit 1 when a value does not fit.
+    pub fn rebake(&mut self, baked: HashMap<String, String>) -> Result<(), ExitCode> {
+        let (lowered, wgsl) = lower_and_emit(&self.front, &baked)?;
+        (self.lowered, self.wgsl, self.baked) = (lowered, wgsl, baked);
+        Ok(())
+    }
 }
 
 /// Opens the best Vulkan adapter and says which one, or explains why there is none (exit 2).

@@ -53,8 +53,10 @@ const HEATMAPS: usize = 4;
 #[derive(Args)]
 pub struct StressArgs {
     /// The sky shader to test (Freeman-compatible: the Freeman sky's uniforms, e.g.
-    /// shaders/freeman_stable.gdshader); without one, the bundled Freeman sky.
-    #[arg(value_name = "FILE")]
+    /// shaders/freeman_stable.gdshader), or a scene file (`SCENE.toml`: its shader, and its
+    /// uniforms as the base of every case; the sweep sets its own sun, altitude, views and sizes);
+    /// without one, the bundled Freeman sky.
+    #[arg(value_name = "FILE|SCENE.toml")]
     file: Option<PathBuf>,
     /// A small sweep for CI: 3 altitudes × 5 sun elevations (with the horizon case), the
     /// scale heights at 0, small images.
@@ -114,8 +116,10 @@ impl Case {
         }
     }
 
-    fn params(&self) -> Result<FreemanParams, String> {
-        let mut params = FreemanParams::default();
+    /// `base` (the Freeman sky's defaults, with a scene file's uniforms over them) with this
+    /// case's uniform set.
+    fn params(&self, base: &FreemanParams) -> Result<FreemanParams, String> {
+        let mut params = *base;
         if let Some((name, value)) = &self.uniform {
             params.set(name, value)?;
         }
@@ -209,13 +213,24 @@ fn cases(quick: bool, ranges: &[(String, String, String)]) -> Vec<Case> {
 }
 
 fn stress(args: &StressArgs) -> Result<ExitCode, ExitCode> {
-    let loaded = sweep::load_freeman(args.file.as_deref())?;
+    let input = super::scene::open_input(args.file.as_deref())?;
+    let loaded = sweep::load_freeman(input.shader.as_deref())?;
+    super::scene::check_scene_uniforms(input.scene.as_ref(), &loaded)?;
+    let mut base = FreemanParams::default();
+    if let Some(file) = &input.scene {
+        super::scene::set_freeman(&mut base, &file.uniform_pairs()).map_err(usage)?;
+        eprintln!(
+            "note: {}: stress uses the scene's shader and uniforms; its own sweep sets the sun, altitude, views \
+             and sizes",
+            file.path.display()
+        );
+    }
     let shader_info = loaded.front.shader.as_ref().ok_or(ExitCode::from(1))?;
-    let name = args.file.as_ref().map(|f| f.display().to_string()).unwrap_or(BUNDLED_NAME.into());
+    let name = input.shader.as_ref().map(|f| f.display().to_string()).unwrap_or(BUNDLED_NAME.into());
     let ranges = hint_ranges(shader_info);
     let cases = cases(args.quick, &ranges);
     for case in &cases {
-        case.params().map_err(|e| usage(format!("{name}: hint_range end not usable: {e}")))?;
+        case.params(&base).map_err(|e| usage(format!("{name}: hint_range end not usable: {e}")))?;
     }
     super::check_output_dir(&args.out_dir, true, &["stress.md", "stress.csv", "grid.png"])?;
     let gpu = open_gpu()?;
@@ -225,7 +240,7 @@ fn stress(args: &StressArgs) -> Result<ExitCode, ExitCode> {
     let size = |view: View| if view == View::Panorama { pano } else { horizon };
 
     let render = |case: &Case| -> Result<Rendered, ExitCode> {
-        let params = case.params().map_err(usage)?;
+        let params = case.params(&base).map_err(usage)?;
         let material = sweep::material(&loaded, &params).map_err(usage)?;
         let (w, h) = size(case.view);
         let scene = case.scene();
