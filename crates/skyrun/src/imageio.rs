@@ -507,28 +507,11 @@ mod tests {
     use exr::prelude::f16;
     use std::fs;
 
-    /// A fresh directory under the system temp dir, removed on drop.
-    struct TempDir(PathBuf);
-
-    impl TempDir {
-        fn new(name: &str) -> Self {
-            let dir = std::env::temp_dir().join(format!("skyrun-imageio-{name}-{}", std::process::id()));
-            let _ = fs::remove_dir_all(&dir);
-            fs::create_dir_all(&dir).unwrap();
-            Self(dir)
-        }
-
-        fn entries(&self) -> Vec<String> {
-            let mut names: Vec<_> = fs::read_dir(&self.0).unwrap().map(|e| e.unwrap().file_name()).collect();
-            names.sort();
-            names.into_iter().map(|n| n.to_string_lossy().into_owned()).collect()
-        }
-    }
-
-    impl Drop for TempDir {
-        fn drop(&mut self) {
-            let _ = fs::remove_dir_all(&self.0);
-        }
+    /// The names in `dir`, sorted.
+    fn entries(dir: &Path) -> Vec<String> {
+        let mut names: Vec<_> = fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name()).collect();
+        names.sort();
+        names.into_iter().map(|n| n.to_string_lossy().into_owned()).collect()
     }
 
     /// Awkward values (subnormal, huge, negative, −0, NaN, ±∞); (0, 0) and the last pixel marked.
@@ -580,8 +563,8 @@ mod tests {
 
     #[test]
     fn exr_round_trip_is_bit_exact_with_row_0_on_top() {
-        let dir = TempDir::new("roundtrip");
-        let path = dir.0.join("sky.exr");
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("sky.exr");
         for (width, height) in [(130, 40), (7, 3), (3, 7), (1, 1)] {
             let image = test_image(width, height);
             write_exr(&path, &image).unwrap(); // also replaces the previous, larger file
@@ -600,13 +583,13 @@ mod tests {
             assert_eq!(px[0], [1.0, 2.0, 3.0, 4.0]);
             assert_eq!(*px.last().unwrap(), if width > 1 { [-5.0, -6.0, -7.0, -8.0] } else { px[0] });
         }
-        assert_eq!(dir.entries(), ["sky.exr"], "no temporary files left");
+        assert_eq!(entries(dir.path()), ["sky.exr"], "no temporary files left");
     }
 
     #[test]
     fn f16_rgb_exr_is_converted_and_alpha_defaults_to_1() {
-        let dir = TempDir::new("f16");
-        let path = dir.0.join("half.exr");
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("half.exr");
         let values = [0.5, 1024.0, -3.0, 6.1035156e-5, 65504.0, 0.0];
         let channels = SpecificChannels::rgb(|Vec2(x, y): Vec2<usize>| {
             let v = values[y * 3 + x];
@@ -626,8 +609,8 @@ mod tests {
 
     #[test]
     fn garbage_exr_input_errors_without_panicking() {
-        let dir = TempDir::new("garbage");
-        let path = dir.0.join("bad.exr");
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("bad.exr");
         write_exr(&path, &test_image(37, 45)).unwrap();
         let valid = fs::read(&path).unwrap();
         let read_file = |bytes: &[u8]| {
@@ -637,7 +620,7 @@ mod tests {
         assert!(read_file(&[]).is_err(), "empty file");
         assert!(read_file(&valid[..valid.len() / 2]).is_err(), "first half");
         assert!(read_file(b"not an exr at all").unwrap_err().to_string().contains("bad.exr"));
-        assert!(read_exr(&dir.0.join("missing.exr")).unwrap_err().to_string().contains("missing.exr"));
+        assert!(read_exr(&dir.path().join("missing.exr")).unwrap_err().to_string().contains("missing.exr"));
 
         // The many variants in memory (rewriting a file thousands of times is slow).
         let read = |bytes: &[u8]| decode_exr(&path, bytes);
@@ -694,29 +677,29 @@ mod tests {
     #[test]
     fn failed_writes_leave_no_files() {
         // Directory missing: the temporary file cannot even be created.
-        let dir = TempDir::new("atomic");
+        let dir = tempfile::tempdir().unwrap();
         let image = test_image(4, 3);
-        let err = write_exr(&dir.0.join("no-such-dir/sky.exr"), &image).unwrap_err();
+        let err = write_exr(&dir.path().join("no-such-dir/sky.exr"), &image).unwrap_err();
         assert!(matches!(err, ImageError::Io { .. }), "{err}");
         assert!(err.to_string().contains("no-such-dir does not exist"), "{err}");
-        assert!(write_png_preview(&dir.0.join("no-such-dir/sky.png"), &image, 1.0, DEFAULT_WHITE).is_err());
-        assert!(write_heatmap_png(&dir.0.join("no-such-dir/sky.png"), &image, &image, 1e-4).is_err());
-        assert_eq!(dir.entries(), Vec::<String>::new(), "no stray temporary files");
+        assert!(write_png_preview(&dir.path().join("no-such-dir/sky.png"), &image, 1.0, DEFAULT_WHITE).is_err());
+        assert!(write_heatmap_png(&dir.path().join("no-such-dir/sky.png"), &image, &image, 1e-4).is_err());
+        assert_eq!(entries(dir.path()), Vec::<String>::new(), "no stray temporary files");
 
         // Target is a non-empty directory: refused before anything is written.
-        let target = dir.0.join("sky.exr");
+        let target = dir.path().join("sky.exr");
         fs::create_dir(&target).unwrap();
         fs::write(target.join("keep"), b"x").unwrap();
         assert!(write_exr(&target, &image).is_err());
         assert!(write_png_preview(&target, &image, 1.0, DEFAULT_WHITE).is_err());
-        assert_eq!(dir.entries(), ["sky.exr"]);
+        assert_eq!(entries(dir.path()), ["sky.exr"]);
         assert!(target.join("keep").exists());
     }
 
     #[test]
     fn png_preview_has_the_tonemapped_values() {
-        let dir = TempDir::new("preview");
-        let path = dir.0.join("preview.png");
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("preview.png");
         let mut pixels = vec![[0.0, 0.0, 0.0, 0.0]; 6];
         pixels[5] = [1.0, 0.25, 4.0, 0.0]; // (2, 1); alpha 0 must not matter
         pixels[1] = [f32::NAN, 1.0, 1.0, 1.0];
@@ -742,13 +725,13 @@ mod tests {
         assert_eq!(rgb, [207, expected(2.0, 1.0, 1.0), expected(2.0, 1.0, 4.0)]);
         assert!(matches!(write_png_preview(&path, &image, 0.0, DEFAULT_WHITE), Err(ImageError::InvalidArgument(_))));
         assert!(write_png_preview(&path, &image, 1.0, [1.0, f32::NAN, 1.0]).is_err());
-        assert_eq!(dir.entries(), ["preview.png"]);
+        assert_eq!(entries(dir.path()), ["preview.png"]);
     }
 
     #[test]
     fn heatmap_colours_follow_the_error() {
-        let dir = TempDir::new("heatmap");
-        let path = dir.0.join("heat.png");
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("heat.png");
         let reference = Image::new(4, 1, vec![[1.0, 2.0, 3.0, 1.0]; 4]).unwrap();
         let mut test = reference.clone();
         test.pixels[1][1] = 2.0 * (1.0 + 1e-4); // rel 1e-4: t = 3/7
@@ -771,8 +754,8 @@ mod tests {
 
     #[test]
     fn side_by_side_places_previews_with_a_gap() {
-        let dir = TempDir::new("side");
-        let path = dir.0.join("side.png");
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("side.png");
         let dark = Image::new(2, 2, vec![[0.0, 0.0, 0.0, 1.0]; 4]).unwrap();
         let bright = Image::new(3, 2, vec![[1e3, 1e3, 1e3, 1.0]; 6]).unwrap();
         write_side_by_side_png(&path, &[&dark, &bright], DEFAULT_EXPOSURE, DEFAULT_WHITE).unwrap();

@@ -274,28 +274,11 @@ mod tests {
     use super::*;
     use std::os::unix::fs::{FileTypeExt, PermissionsExt, symlink};
 
-    /// A fresh directory under the system temp dir, removed on drop.
-    struct TempDir(PathBuf);
-
-    impl TempDir {
-        fn new(name: &str) -> Self {
-            let dir = std::env::temp_dir().join(format!("skyrun-safe-io-{name}-{}", std::process::id()));
-            let _ = fs::remove_dir_all(&dir);
-            fs::create_dir_all(&dir).unwrap();
-            Self(dir)
-        }
-
-        fn entries(&self) -> Vec<String> {
-            let mut names: Vec<_> = fs::read_dir(&self.0).unwrap().map(|e| e.unwrap().file_name()).collect();
-            names.sort();
-            names.into_iter().map(|n| n.to_string_lossy().into_owned()).collect()
-        }
-    }
-
-    impl Drop for TempDir {
-        fn drop(&mut self) {
-            let _ = fs::remove_dir_all(&self.0);
-        }
+    /// The names in `dir`, sorted.
+    fn entries(dir: &Path) -> Vec<String> {
+        let mut names: Vec<_> = fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name()).collect();
+        names.sort();
+        names.into_iter().map(|n| n.to_string_lossy().into_owned()).collect()
     }
 
     fn mkfifo(path: &Path) {
@@ -305,8 +288,8 @@ mod tests {
 
     #[test]
     fn writes_and_replaces_regular_files_keeping_their_mode() {
-        let dir = TempDir::new("regular");
-        let path = dir.0.join("a.txt");
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("a.txt");
         write_atomically(&path, b"one").unwrap();
         assert_eq!(fs::read(&path).unwrap(), b"one");
         fs::set_permissions(&path, fs::Permissions::from_mode(0o600)).unwrap();
@@ -314,17 +297,17 @@ mod tests {
         assert_eq!(fs::read(&path).unwrap(), b"two, longer");
         assert_eq!(fs::metadata(&path).unwrap().permissions().mode() & 0o777, 0o600);
         assert_eq!(check_output(&path).unwrap(), path);
-        assert_eq!(dir.entries(), ["a.txt"], "no temporary or probe files left");
+        assert_eq!(entries(dir.path()), ["a.txt"], "no temporary or probe files left");
     }
 
     #[test]
     fn refuses_directories_fifos_sockets_and_devices_untouched() {
-        let dir = TempDir::new("special");
-        let sub = dir.0.join("sub");
+        let dir = tempfile::tempdir().unwrap();
+        let sub = dir.path().join("sub");
         fs::create_dir(&sub).unwrap();
-        let fifo = dir.0.join("fifo");
+        let fifo = dir.path().join("fifo");
         mkfifo(&fifo);
-        let socket = dir.0.join("socket");
+        let socket = dir.path().join("socket");
         let _listener = std::os::unix::net::UnixListener::bind(&socket).unwrap();
         for (path, what) in [(&sub, "a directory"), (&fifo, "a FIFO"), (&socket, "a socket")] {
             for err in [write_atomically(path, b"x").unwrap_err(), check_output(path).unwrap_err()] {
@@ -336,30 +319,30 @@ mod tests {
         assert!(fs::symlink_metadata(&fifo).unwrap().file_type().is_fifo());
         assert!(fs::symlink_metadata(&socket).unwrap().file_type().is_socket());
         // A device, reached through a link so that nothing in /dev is ever the write's target.
-        let device = dir.0.join("null-link");
+        let device = dir.path().join("null-link");
         symlink("/dev/null", &device).unwrap();
         let err = write_atomically(&device, b"x").unwrap_err().to_string();
         assert!(err.contains("its link target /dev/null is a character device"), "{err}");
         assert!(fs::metadata("/dev/null").unwrap().file_type().is_char_device());
         // A trailing slash names a directory, existing or not.
-        let dir_text = dir.0.display();
+        let dir_text = dir.path().display();
         for text in [format!("{dir_text}/new/"), format!("{dir_text}/.."), format!("{dir_text}/new/.")] {
             let err = write_atomically(Path::new(&text), b"x").unwrap_err().to_string();
             assert!(err.contains("names a directory"), "{text}: {err}");
         }
-        assert_eq!(dir.entries(), ["fifo", "null-link", "socket", "sub"]);
+        assert_eq!(entries(dir.path()), ["fifo", "null-link", "socket", "sub"]);
     }
 
     #[test]
     fn writes_through_symlinks_and_keeps_them() {
-        let dir = TempDir::new("links");
-        let runs = dir.0.join("runs");
+        let dir = tempfile::tempdir().unwrap();
+        let runs = dir.path().join("runs");
         fs::create_dir(&runs).unwrap();
         fs::write(runs.join("run42.exr"), b"old").unwrap();
         // latest -> runs/run42.exr (relative), alias -> latest (absolute): a chain of two.
-        let latest = dir.0.join("latest.exr");
+        let latest = dir.path().join("latest.exr");
         symlink("runs/run42.exr", &latest).unwrap();
-        let alias = dir.0.join("alias.exr");
+        let alias = dir.path().join("alias.exr");
         symlink(&latest, &alias).unwrap();
         assert_eq!(check_output(&alias).unwrap(), runs.join("run42.exr"));
         write_atomically(&alias, b"new").unwrap();
@@ -369,23 +352,23 @@ mod tests {
         assert_eq!(fs::read_dir(&runs).unwrap().count(), 1, "the temporary file was in the target's directory");
 
         // A dangling link to a missing file in an existing directory: the file is created.
-        let dangling = dir.0.join("next.exr");
+        let dangling = dir.path().join("next.exr");
         symlink("runs/run43.exr", &dangling).unwrap();
         write_atomically(&dangling, b"43").unwrap();
         assert_eq!(fs::read(runs.join("run43.exr")).unwrap(), b"43");
         assert!(fs::symlink_metadata(&dangling).unwrap().file_type().is_symlink());
 
         // Dangling into a missing directory, a link to a directory, a loop: refused.
-        let nowhere = dir.0.join("nowhere.exr");
+        let nowhere = dir.path().join("nowhere.exr");
         symlink("missing/run.exr", &nowhere).unwrap();
         let err = write_atomically(&nowhere, b"x").unwrap_err();
         assert_eq!(err.kind(), ErrorKind::NotFound);
         assert!(err.to_string().contains("missing does not exist"), "{err}");
-        let to_dir = dir.0.join("to-dir.exr");
+        let to_dir = dir.path().join("to-dir.exr");
         symlink("runs", &to_dir).unwrap();
         let err = write_atomically(&to_dir, b"x").unwrap_err().to_string();
         assert!(err.contains("its link target") && err.contains("is a directory"), "{err}");
-        let (a, b) = (dir.0.join("loop-a"), dir.0.join("loop-b"));
+        let (a, b) = (dir.path().join("loop-a"), dir.path().join("loop-b"));
         symlink("loop-b", &a).unwrap();
         symlink("loop-a", &b).unwrap();
         assert!(write_atomically(&a, b"x").unwrap_err().to_string().contains("symbolic links in a row"));
@@ -394,50 +377,50 @@ mod tests {
 
     #[test]
     fn missing_and_unusable_directories() {
-        let dir = TempDir::new("dirs");
-        let err = check_output(&dir.0.join("no/such/file.exr")).unwrap_err();
+        let dir = tempfile::tempdir().unwrap();
+        let err = check_output(&dir.path().join("no/such/file.exr")).unwrap_err();
         assert_eq!(err.kind(), ErrorKind::NotFound);
         assert!(err.to_string().contains("no/such does not exist"), "{err}");
-        fs::write(dir.0.join("file"), b"").unwrap();
-        let err = check_output(&dir.0.join("file/x.exr")).unwrap_err().to_string();
+        fs::write(dir.path().join("file"), b"").unwrap();
+        let err = check_output(&dir.path().join("file/x.exr")).unwrap_err().to_string();
         assert!(err.contains("is a regular file, not a directory"), "{err}");
 
         // An output folder: missing is fine when the command creates it, under a directory.
-        let out = dir.0.join("out/nested");
+        let out = dir.path().join("out/nested");
         check_output_dir(&out, true).unwrap();
-        assert!(!dir.0.join("out").exists(), "the check creates nothing");
+        assert!(!dir.path().join("out").exists(), "the check creates nothing");
         let err = check_output_dir(&out, false).unwrap_err().to_string();
         assert!(err.contains("does not exist"), "{err}");
-        let err = check_output_dir(&dir.0.join("file/out"), true).unwrap_err().to_string();
+        let err = check_output_dir(&dir.path().join("file/out"), true).unwrap_err().to_string();
         assert!(err.contains("is a regular file, not a directory"), "{err}");
         create_output_dir(&out).unwrap();
         check_output_dir(&out, false).unwrap();
-        assert!(create_output_dir(&dir.0.join("file")).is_err());
-        assert_eq!(dir.entries(), ["file", "out"]);
+        assert!(create_output_dir(&dir.path().join("file")).is_err());
+        assert_eq!(entries(dir.path()), ["file", "out"]);
     }
 
     #[test]
     fn read_limited_refuses_special_and_large_files() {
-        let dir = TempDir::new("read");
-        let small = dir.0.join("small");
+        let dir = tempfile::tempdir().unwrap();
+        let small = dir.path().join("small");
         fs::write(&small, b"0123456789").unwrap();
         assert_eq!(read_limited(&small, 10).unwrap(), b"0123456789");
         let err = read_limited(&small, 9).unwrap_err();
         assert_eq!(err.kind(), ErrorKind::FileTooLarge);
         assert!(err.to_string().contains("10 bytes, over the 9 bytes limit"), "{err}");
         // A sparse 5 GiB file: refused from its size, nothing read.
-        let big = dir.0.join("big");
+        let big = dir.path().join("big");
         fs::File::create(&big).unwrap().set_len(5 << 30).unwrap();
         let err = read_limited(&big, 4 << 20).unwrap_err().to_string();
         assert!(err.contains("5 GiB, over the 4 MiB limit"), "{err}");
         // A FIFO (no writer: opening it would block), a device without end, a directory.
-        let fifo = dir.0.join("fifo");
+        let fifo = dir.path().join("fifo");
         mkfifo(&fifo);
         let err = read_limited(&fifo, 1 << 20).unwrap_err().to_string();
         assert!(err.contains("a FIFO (named pipe), not a regular file"), "{err}");
         let err = read_limited(Path::new("/dev/zero"), 1 << 20).unwrap_err().to_string();
         assert!(err.contains("a character device"), "{err}");
-        assert_eq!(read_limited(&dir.0, 1 << 20).unwrap_err().kind(), ErrorKind::IsADirectory);
+        assert_eq!(read_limited(&dir.path(), 1 << 20).unwrap_err().kind(), ErrorKind::IsADirectory);
         // A regular file whose metadata says 0 bytes but which has more: bounded by `take`.
         let status = fs::read("/proc/self/status");
         if status.as_ref().is_ok_and(|s| s.len() > 64) {
