@@ -1,5 +1,6 @@
 //! `gdsky render [FILE] -o OUT.exr …` and `gdsky reference -o OUT.exr … [--precision f32|f64]`.
 
+use super::scene::SkipArgs;
 use super::scene::{
     SceneArgs, check_outputs, check_scene_uniforms, load_shader_baking, open_gpu, open_input, set_freeman, strip,
     write_outputs,
@@ -30,6 +31,8 @@ pub struct RenderArgs {
     png: Option<PathBuf>,
     #[command(flatten)]
     scene: SceneArgs,
+    #[command(flatten)]
+    skip: SkipArgs,
 }
 
 pub fn run(args: &RenderArgs, matches: &ArgMatches) -> ExitCode {
@@ -49,6 +52,8 @@ fn render(args: &RenderArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
     let (views, width, height) = scene_args.views().map_err(usage)?;
     let overrides = scene_args.overrides().map_err(usage)?;
     check_outputs(&args.out, args.png.as_ref())?;
+    let occluder = args.skip.occluder(&views, width, height)?;
+    let options = args.skip.options(occluder.as_ref());
     let started = Instant::now();
     let cli_sets = args.scene.overrides().map_err(usage)?;
     let loaded = load_shader_baking(input.shader.as_deref(), |shader| {
@@ -76,7 +81,7 @@ fn render(args: &RenderArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
     let mut rendered = Vec::with_capacity(views.len());
     let mut gpu_time = std::time::Duration::ZERO;
     for view in views {
-        let r = shader.render(&gpu, view, width, height, &builtins, &material).map_err(|err| {
+        let r = shader.render_with(&gpu, view, width, height, &builtins, &material, &options).map_err(|err| {
             eprintln!("error: {err}");
             ExitCode::from(1)
         })?;

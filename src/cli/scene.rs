@@ -200,6 +200,95 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
     Ok((w, h))
 }
 
+/// The sky's resolution (`--sky-resolution`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum)]
+pub enum SkyResolution {
+    /// Every pixel shaded.
+    #[default]
+    Full,
+    /// Shaded at W/2×H/2 (sides rounded up) and upsampled.
+    Half,
+    /// Shaded at W/4×H/4 (sides rounded up) and upsampled.
+    Quarter,
+}
+
+impl From<SkyResolution> for skyrun::SkyResolution {
+    fn from(r: SkyResolution) -> Self {
+        match r {
+            SkyResolution::Full => skyrun::SkyResolution::Full,
+            SkyResolution::Half => skyrun::SkyResolution::Half,
+            SkyResolution::Quarter => skyrun::SkyResolution::Quarter,
+        }
+    }
+}
+
+/// The filter that upsamples a reduced sky resolution (`--upsample`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum)]
+pub enum UpsampleArg {
+    /// Bilinear (2×2 texels): cheapest; blurs the sun disk's edge most.
+    #[default]
+    Bilinear,
+    /// Catmull–Rom bicubic (4×4 texels), clamped to the 2×2 neighbours' range: sharper.
+    CatmullRom,
+}
+
+impl From<UpsampleArg> for skyrun::UpsampleFilter {
+    fn from(f: UpsampleArg) -> Self {
+        match f {
+            UpsampleArg::Bilinear => skyrun::UpsampleFilter::Bilinear,
+            UpsampleArg::CatmullRom => skyrun::UpsampleFilter::CatmullRom,
+        }
+    }
+}
+
+/// What the sky may skip (issue #11): pixels behind geometry and resolution it does not need.
+#[derive(Args, Clone, Debug, Default)]
+pub struct SkipArgs {
+    /// A mask of the geometry in front of the sky: a PNG, white = covered (grey ≥ ½ and, with
+    /// alpha, alpha ≥ ½), scaled to --size with nearest-neighbour sampling. It is drawn into
+    /// the depth buffer first, so covered pixels are never shaded; they hold (0, 0, 0, 1).
+    /// Not with --projection cubemap (Godot's radiance pass has no geometry in front).
+    #[arg(long, value_name = "MASK.png")]
+    pub occluder: Option<PathBuf>,
+    /// Shade the sky at full, half (W/2×H/2) or quarter (W/4×H/4) resolution, Godot's own
+    /// sub-passes scaled with it, and upsample to --size on the GPU.
+    #[arg(long, value_enum, value_name = "full|half|quarter", default_value_t = SkyResolution::Full)]
+    pub sky_resolution: SkyResolution,
+    /// The upsampling filter of a reduced --sky-resolution.
+    #[arg(long, value_enum, value_name = "bilinear|catmull-rom", default_value_t = UpsampleArg::Bilinear)]
+    pub upsample: UpsampleArg,
+}
+
+impl SkipArgs {
+    /// Reads the occluder mask for `views` of `width`×`height` (before any GPU work). Exit 2
+    /// when the file cannot be read (missing, not a regular file, over
+    /// [`skyrun::MAX_MASK_BYTES`]), 1 when it is not a PNG or the projection is a cubemap.
+    pub fn occluder(
+        &self,
+        views: &[Projection],
+        width: u32,
+        height: u32,
+    ) -> Result<Option<skyrun::Occluder>, ExitCode> {
+        let Some(path) = &self.occluder else {
+            return Ok(None);
+        };
+        if views.iter().any(|v| matches!(v, Projection::CubeFace(_))) {
+            return Err(super::usage(
+                "--occluder does not apply to --projection cubemap (Godot's radiance pass draws no geometry in front of the sky)",
+            ));
+        }
+        skyrun::Occluder::from_png(path, width, height).map(Some).map_err(|err| {
+            eprintln!("error: {err}");
+            ExitCode::from(if err.is_read() { 2 } else { 1 })
+        })
+    }
+
+    /// The render options with `occluder` (from [`SkipArgs::occluder`]).
+    pub fn options<'a>(&self, occluder: Option<&'a skyrun::Occluder>) -> skyrun::RenderOptions<'a> {
+        skyrun::RenderOptions { occluder, resolution: self.sky_resolution.into(), filter: self.upsample.into() }
+    }
+}
+
 /// `--sun ELEV,AZIM`.
 pub fn parse_sun(s: &str) -> Result<(f64, f64), String> {
     let [e, a] = components::<2>(s, "elevation, azimuth")?;

@@ -117,6 +117,7 @@ mod material;
 mod metrics;
 mod render;
 pub mod safe_io;
+mod skip;
 
 pub use builtins::{RenderPass, SkyBuiltins, SkyLight, offsets};
 pub use gpu::{AdapterSummary, Gpu, NoAdapter};
@@ -131,6 +132,7 @@ pub use material::{
 };
 pub use metrics::{Metrics, PixelDiff, compare, worst_pixels};
 pub use render::{RenderError, Rendered, SkyShader, SubPasses, fragment_entry, render, sub_pass_size};
+pub use skip::{MAX_MASK_BYTES, MaskError, OCCLUDED, Occluder, RenderOptions, SkyResolution, UpsampleFilter};
 pub use skyref::Projection;
 
 #[cfg(test)]

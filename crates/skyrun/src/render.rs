@@ -9,6 +9,7 @@
 use crate::bindings::{self, Binding, BindingError, BindingKind};
 use crate::builtins::{RenderPass, SkyBuiltins};
 use crate::gpu::Gpu;
+use crate::skip::{OCCLUDED, Occluder, RenderOptions, SkyResolution, UPSAMPLE_WGSL, UpsampleFilter};
 use skyref::Projection;
 use std::collections::HashMap;
 use std::fmt;
@@ -62,6 +63,13 @@ pub enum RenderError {
     Poll(String),
     /// Mapping the read-back buffer failed.
     Map(String),
+    /// The occluder's size is not the render's.
+    OccluderSize {
+        /// The mask's width and height.
+        mask: (u32, u32),
+        /// The render's.
+        render: (u32, u32),
+    },
 }
 
 impl fmt::Display for RenderError {
@@ -77,6 +85,9 @@ impl fmt::Display for RenderError {
             RenderError::Wgpu { kind, message } => write!(f, "wgpu {kind} error: {message}"),
             RenderError::Poll(m) => write!(f, "waiting for the GPU failed: {m}"),
             RenderError::Map(m) => write!(f, "reading the image back failed: {m}"),
+            RenderError::OccluderSize { mask, render } => {
+                write!(f, "the occluder is {}×{} but the render is {}×{}", mask.0, mask.1, render.0, render.1)
+            }
         }
     }
 }
@@ -154,11 +165,29 @@ pub struct SkyShader {
     bindings: Vec<Binding>,
     group_layouts: Vec<wgpu::BindGroupLayout>,
     pipeline_layout: wgpu::PipelineLayout,
-    pipelines: Mutex<HashMap<(&'static str, wgpu::TextureFormat), wgpu::RenderPipeline>>,
+    pipelines: Mutex<HashMap<(&'static str, wgpu::TextureFormat, Option<wgpu::CompareFunction>), wgpu::RenderPipeline>>,
     sub_passes: SubPasses,
     repeat_sampler: wgpu::Sampler,
     clamp_sampler: wgpu::Sampler,
     texture_defaults: Vec<((u32, u32), [f32; 4])>,
+    /// The depth `vs_main` gives the sky: its far plane (1 standard Z, 0 reversed Z), read from
+    /// the module ([`gdsky_naga::wrapper::far_plane_depth`]); 1 when it cannot be read.
+    far: f32,
+    /// The upsampling pipeline of a reduced sky resolution, per (with depth test), on first use.
+    upsample: Mutex<HashMap<bool, wgpu::RenderPipeline>>,
+}
+
+/// The depth format of the occluder: 16-bit unorm holds 0, ½ and 1 exactly and, unlike
+/// Depth32Float, can be written from the host (`write_texture`).
+const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth16Unorm;
+
+/// Where a render pass draws: the colour target, its clear value and, with an occluder, the
+/// depth buffer and the test that hides the sky behind it.
+struct Target<'a> {
+    view: &'a wgpu::TextureView,
+    format: wgpu::TextureFormat,
+    clear: wgpu::Color,
+    depth: Option<(&'a wgpu::TextureView, wgpu::CompareFunction)>,
 }
 
 impl SkyShader {
@@ -166,6 +195,11 @@ impl SkyShader {
     /// declares (see [`bindings::discover`]).
     pub fn new(gpu: &Gpu, wgsl: &str, sub_passes: SubPasses) -> Result<SkyShader, RenderError> {
         let bindings = bindings::discover(wgsl)?;
+        // `discover` parsed it already, so this parse succeeds.
+        let far = naga::front::wgsl::parse_str(wgsl)
+            .ok()
+            .and_then(|m| gdsky_naga::wrapper::far_plane_depth(&m))
+            .unwrap_or(gdsky_naga::wrapper::FAR_PLANE_STANDARD);
         let device = &gpu.device;
         scoped(gpu, || {
             let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -210,6 +244,8 @@ impl SkyShader {
                 repeat_sampler: sampler(wgpu::AddressMode::Repeat),
                 clamp_sampler: sampler(wgpu::AddressMode::ClampToEdge),
                 texture_defaults: Vec::new(),
+                far,
+                upsample: Mutex::new(HashMap::new()),
             }
         })
     }
@@ -233,11 +269,31 @@ impl SkyShader {
         self.bindings.iter().any(|b| b.group == group && b.binding == binding)
     }
 
-    /// The pipeline for an entry point and target format, built on first use.
-    fn pipeline(&self, gpu: &Gpu, entry: &'static str, format: wgpu::TextureFormat) -> wgpu::RenderPipeline {
+    /// The sky's far plane (the depth of `vs_main`): 1 with standard Z, 0 with reversed Z.
+    pub fn far_plane(&self) -> f32 {
+        self.far
+    }
+
+    /// The depth test that hides the sky behind anything nearer than the far plane.
+    fn depth_compare(&self) -> wgpu::CompareFunction {
+        if self.far == gdsky_naga::wrapper::FAR_PLANE_REVERSED {
+            wgpu::CompareFunction::GreaterEqual
+        } else {
+            wgpu::CompareFunction::LessEqual
+        }
+    }
+
+    /// The pipeline for an entry point and target format (and depth test), built on first use.
+    fn pipeline(
+        &self,
+        gpu: &Gpu,
+        entry: &'static str,
+        format: wgpu::TextureFormat,
+        depth: Option<wgpu::CompareFunction>,
+    ) -> wgpu::RenderPipeline {
         let mut cache = self.pipelines.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
         cache
-            .entry((entry, format))
+            .entry((entry, format, depth))
             .or_insert_with(|| {
                 gpu.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                     label: Some(entry),
@@ -253,7 +309,7 @@ impl SkyShader {
                         cull_mode: None,
                         ..Default::default()
                     },
-                    depth_stencil: None,
+                    depth_stencil: depth.map(depth_state),
                     multisample: wgpu::MultisampleState::default(),
                     fragment: Some(wgpu::FragmentState {
                         module: &self.module,
@@ -290,10 +346,40 @@ impl SkyShader {
         builtins: &SkyBuiltins,
         material: &[u8],
     ) -> Result<Rendered, RenderError> {
+        self.render_with(gpu, projection, width, height, builtins, material, &RenderOptions::default())
+    }
+
+    /// [`SkyShader::render`], skipping what `options` says the scene does not need.
+    ///
+    /// * An occluder (its size must be `width`×`height`) goes into a depth buffer before the
+    ///   full pass (depth ½ where covered, the far plane elsewhere); the full pass tests against
+    ///   it, so a covered fragment is rejected before it is shaded, and the pixel keeps
+    ///   [`OCCLUDED`]. Godot's sub-passes are not occluded (Godot renders them whole).
+    /// * A reduced resolution renders every pass (the sub-passes scaled with it) at
+    ///   [`SkyResolution::shaded_size`], then upsamples to the target with `options.filter`
+    ///   (wrapping around horizontally in the panorama), all in the same command buffer; with an
+    ///   occluder, the reduced pass skips only texels no visible pixel reads
+    ///   ([`Occluder::reduced`]) and the upsampling pass is depth-tested too.
+    #[allow(clippy::too_many_arguments)]
+    pub fn render_with(
+        &self,
+        gpu: &Gpu,
+        projection: Projection,
+        width: u32,
+        height: u32,
+        builtins: &SkyBuiltins,
+        material: &[u8],
+        options: &RenderOptions<'_>,
+    ) -> Result<Rendered, RenderError> {
         let device = &gpu.device;
         let max = device.limits().max_texture_dimension_2d;
         if width == 0 || height == 0 || width > max || height > max {
             return Err(RenderError::InvalidSize { width, height, max });
+        }
+        if let Some(o) = options.occluder
+            && (o.width, o.height) != (width, height)
+        {
+            return Err(RenderError::OccluderSize { mask: (o.width, o.height), render: (width, height) });
         }
         for b in &self.bindings {
             if let (bindings::MATERIAL_GROUP, 0, BindingKind::Uniform { size }) = (b.group, b.binding, b.kind)
@@ -314,7 +400,7 @@ impl SkyShader {
             _ => builtins,
         };
         let (readback, submission, padded_row, timestamps) =
-            scoped(gpu, || self.record(gpu, projection, width, height, builtins, material))?;
+            scoped(gpu, || self.record(gpu, projection, width, height, builtins, material, options))?;
         let submitted = Instant::now();
         let (sender, receiver) = mpsc::channel();
         readback.map_async(wgpu::MapMode::Read, .., move |result| {
@@ -376,6 +462,7 @@ impl SkyShader {
     /// read-back buffer, the submission, the padded row size and, with timestamp queries, their
     /// read-back buffer and the number of passes timed. Errors surface through the caller's
     /// error scopes.
+    #[allow(clippy::too_many_arguments)]
     fn record(
         &self,
         gpu: &Gpu,
@@ -384,12 +471,34 @@ impl SkyShader {
         height: u32,
         builtins: &SkyBuiltins,
         material: &[u8],
+        options: &RenderOptions<'_>,
     ) -> (wgpu::Buffer, wgpu::SubmissionIndex, u32, Option<(wgpu::Buffer, usize)>) {
         let device = &gpu.device;
         let entry = fragment_entry(projection);
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("sky") });
-        // Two timestamps per pass (at most quarter, half, full).
-        const MAX_PASSES: u32 = 3;
+        // Two timestamps per pass (at most quarter, half, full, upsampling).
+        const MAX_PASSES: u32 = 4;
+        // The size the sky is shaded at, and its built-ins (a reduced resolution is a smaller
+        // screen for every pass).
+        let (target_width, target_height) = (width, height);
+        let (width, height) = options.resolution.shaded_size(width, height);
+        let reduced = options.resolution != SkyResolution::Full;
+        let scaled_builtins;
+        let builtins = if reduced && builtins.render_pass != RenderPass::Cubemap {
+            scaled_builtins = SkyBuiltins { screen_size: [width as f32, height as f32], ..*builtins };
+            &scaled_builtins
+        } else {
+            builtins
+        };
+        let wrap_x = matches!(projection, Projection::Panorama);
+        let occluder = options.occluder.map(|o| {
+            if reduced {
+                std::borrow::Cow::Owned(o.reduced(width, height, options.filter, wrap_x))
+            } else {
+                std::borrow::Cow::Borrowed(o)
+            }
+        });
+        let depth_view = occluder.as_deref().map(|o| self.depth_buffer(gpu, o));
         let queries = gpu.has_timestamps().then(|| {
             device.create_query_set(&wgpu::QuerySetDescriptor {
                 label: Some("sky pass times"),
@@ -424,7 +533,8 @@ impl SkyShader {
             let sub = SkyBuiltins { screen_size: [w as f32, h as f32], render_pass: pass, ..*builtins };
             let groups =
                 self.bind_groups(gpu, &sub, material_buffer.as_ref(), half_view.as_ref(), quarter_view.as_ref());
-            self.draw(gpu, &mut encoder, &view, entry, SUB_PASS_FORMAT, &groups, queries.as_ref().map(|q| (q, passes)));
+            let target = Target { view: &view, format: SUB_PASS_FORMAT, clear: wgpu::Color::TRANSPARENT, depth: None };
+            self.draw(gpu, &mut encoder, &target, entry, &groups, queries.as_ref().map(|q| (q, passes)));
             passes += 1;
             match pass {
                 RenderPass::Quarter => quarter_view = Some(view),
@@ -432,12 +542,43 @@ impl SkyShader {
             }
         }
 
-        let target = render_target(gpu, width, height, FULL_FORMAT, wgpu::TextureUsages::COPY_SRC);
+        let usage = if reduced { wgpu::TextureUsages::TEXTURE_BINDING } else { wgpu::TextureUsages::COPY_SRC };
+        let target = render_target(gpu, width, height, FULL_FORMAT, usage);
         let view = target.create_view(&wgpu::TextureViewDescriptor::default());
         let groups =
             self.bind_groups(gpu, builtins, material_buffer.as_ref(), half_view.as_ref(), quarter_view.as_ref());
-        self.draw(gpu, &mut encoder, &view, entry, FULL_FORMAT, &groups, queries.as_ref().map(|q| (q, passes)));
+        let compare = self.depth_compare();
+        let sky_target = Target {
+            view: &view,
+            format: FULL_FORMAT,
+            clear: occluded_color(),
+            depth: depth_view.as_ref().map(|d| (d, compare)),
+        };
+        self.draw(gpu, &mut encoder, &sky_target, entry, &groups, queries.as_ref().map(|q| (q, passes)));
         passes += 1;
+        let target = if reduced {
+            let full = render_target(gpu, target_width, target_height, FULL_FORMAT, wgpu::TextureUsages::COPY_SRC);
+            let full_view = full.create_view(&wgpu::TextureViewDescriptor::default());
+            let full_depth = options.occluder.map(|o| self.depth_buffer(gpu, o));
+            let up = Target {
+                view: &full_view,
+                format: FULL_FORMAT,
+                clear: occluded_color(),
+                depth: full_depth.as_ref().map(|d| (d, compare)),
+            };
+            let params = UpsampleParams {
+                src: [width, height],
+                dst: [target_width, target_height],
+                filter: options.filter,
+                wrap_x,
+            };
+            self.upsample(gpu, &mut encoder, &view, &up, &params, queries.as_ref().map(|q| (q, passes)));
+            passes += 1;
+            full
+        } else {
+            target
+        };
+        let (width, height) = (target_width, target_height);
         let timestamps = queries.map(|set| {
             let bytes = u64::from(2 * passes) * 8;
             let resolved = device.create_buffer(&wgpu::BufferDescriptor {
@@ -566,39 +707,210 @@ impl SkyShader {
         &self,
         gpu: &Gpu,
         encoder: &mut wgpu::CommandEncoder,
-        view: &wgpu::TextureView,
+        target: &Target<'_>,
         entry: &'static str,
-        format: wgpu::TextureFormat,
         groups: &[wgpu::BindGroup],
         timestamps: Option<(&wgpu::QuerySet, u32)>,
     ) {
-        let pipeline = self.pipeline(gpu, entry, format);
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("sky"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            depth_stencil_attachment: None,
-            timestamp_writes: timestamps.map(|(query_set, index)| wgpu::RenderPassTimestampWrites {
-                query_set,
-                beginning_of_pass_write_index: Some(2 * index),
-                end_of_pass_write_index: Some(2 * index + 1),
-            }),
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
+        let pipeline = self.pipeline(gpu, entry, target.format, target.depth.map(|d| d.1));
+        let mut pass = begin_pass(encoder, target, timestamps);
         pass.set_pipeline(&pipeline);
         for (i, group) in groups.iter().enumerate() {
             pass.set_bind_group(i as u32, group, &[]);
         }
         pass.draw(0..3, 0..1);
     }
+}
+
+impl SkyShader {
+    /// A depth buffer holding the occluder: depth ½ where covered (nearer than the far plane in
+    /// either convention), the far plane elsewhere. Written from the host: the geometry a real
+    /// renderer would have drawn first.
+    fn depth_buffer(&self, gpu: &Gpu, occluder: &Occluder) -> wgpu::TextureView {
+        let far = if self.far == gdsky_naga::wrapper::FAR_PLANE_REVERSED { 0 } else { u16::MAX };
+        let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("occluder depth"),
+            size: wgpu::Extent3d { width: occluder.width, height: occluder.height, depth_or_array_layers: 1 },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: DEPTH_FORMAT,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_DST,
+            view_formats: &[],
+        });
+        gpu.queue.write_texture(
+            wgpu::TexelCopyTextureInfo {
+                texture: &texture,
+                mip_level: 0,
+                origin: wgpu::Origin3d::ZERO,
+                aspect: wgpu::TextureAspect::DepthOnly,
+            },
+            &occluder.depth_texels(far, 1 << 15),
+            wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(occluder.width * 2), rows_per_image: None },
+            wgpu::Extent3d { width: occluder.width, height: occluder.height, depth_or_array_layers: 1 },
+        );
+        texture.create_view(&wgpu::TextureViewDescriptor::default())
+    }
+
+    /// Upsamples the reduced sky `src` into `target`.
+    fn upsample(
+        &self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        src: &wgpu::TextureView,
+        target: &Target<'_>,
+        params: &UpsampleParams,
+        timestamps: Option<(&wgpu::QuerySet, u32)>,
+    ) {
+        let device = &gpu.device;
+        let pipeline = {
+            let mut cache = self.upsample.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+            cache
+                .entry(target.depth.is_some())
+                .or_insert_with(|| {
+                    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                        label: Some("sky upsample"),
+                        source: wgpu::ShaderSource::Wgsl(UPSAMPLE_WGSL.into()),
+                    });
+                    // Explicit, since a derived layout would ask for a filterable float texture
+                    // and Rgba32Float is not one without an optional feature.
+                    let group = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                        label: Some("sky upsample"),
+                        entries: &[
+                            wgpu::BindGroupLayoutEntry {
+                                binding: 0,
+                                visibility: wgpu::ShaderStages::FRAGMENT,
+                                ty: wgpu::BindingType::Texture {
+                                    sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                                    view_dimension: wgpu::TextureViewDimension::D2,
+                                    multisampled: false,
+                                },
+                                count: None,
+                            },
+                            wgpu::BindGroupLayoutEntry {
+                                binding: 1,
+                                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+                                ty: wgpu::BindingType::Buffer {
+                                    ty: wgpu::BufferBindingType::Uniform,
+                                    has_dynamic_offset: false,
+                                    min_binding_size: None,
+                                },
+                                count: None,
+                            },
+                        ],
+                    });
+                    let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                        label: Some("sky upsample"),
+                        bind_group_layouts: &[Some(&group)],
+                        immediate_size: 0,
+                    });
+                    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                        label: Some("sky upsample"),
+                        layout: Some(&layout),
+                        vertex: wgpu::VertexState {
+                            module: &module,
+                            entry_point: Some("vs_main"),
+                            compilation_options: Default::default(),
+                            buffers: &[],
+                        },
+                        primitive: wgpu::PrimitiveState::default(),
+                        depth_stencil: target.depth.map(|d| depth_state(d.1)),
+                        multisample: wgpu::MultisampleState::default(),
+                        fragment: Some(wgpu::FragmentState {
+                            module: &module,
+                            entry_point: Some("fs_main"),
+                            compilation_options: Default::default(),
+                            targets: &[Some(wgpu::ColorTargetState {
+                                format: target.format,
+                                blend: None,
+                                write_mask: wgpu::ColorWrites::ALL,
+                            })],
+                        }),
+                        multiview_mask: None,
+                        cache: None,
+                    })
+                })
+                .clone()
+        };
+        let mut bytes = Vec::with_capacity(32);
+        for v in [params.src[0], params.src[1], params.dst[0], params.dst[1]] {
+            bytes.extend_from_slice(&(v as f32).to_le_bytes());
+        }
+        let filter = u32::from(params.filter == UpsampleFilter::CatmullRom);
+        bytes.extend_from_slice(&filter.to_le_bytes());
+        bytes.extend_from_slice(&u32::from(params.wrap_x).to_le_bytes());
+        bytes.extend_from_slice(&self.far.to_le_bytes());
+        bytes.extend_from_slice(&0f32.to_le_bytes());
+        let buffer = uniform_buffer(gpu, "upsample params", &bytes);
+        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("sky upsample"),
+            layout: &pipeline.get_bind_group_layout(0),
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(src) },
+                wgpu::BindGroupEntry { binding: 1, resource: buffer.as_entire_binding() },
+            ],
+        });
+        let mut pass = begin_pass(encoder, target, timestamps);
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        pass.draw(0..3, 0..1);
+    }
+}
+
+/// What the upsampling pass needs to know.
+struct UpsampleParams {
+    src: [u32; 2],
+    dst: [u32; 2],
+    filter: UpsampleFilter,
+    wrap_x: bool,
+}
+
+/// [`OCCLUDED`] as a clear colour.
+fn occluded_color() -> wgpu::Color {
+    let [r, g, b, a] = OCCLUDED.map(f64::from);
+    wgpu::Color { r, g, b, a }
+}
+
+/// The depth state of a sky pass: test against the occluder, never write.
+fn depth_state(compare: wgpu::CompareFunction) -> wgpu::DepthStencilState {
+    wgpu::DepthStencilState {
+        format: DEPTH_FORMAT,
+        depth_write_enabled: Some(false),
+        depth_compare: Some(compare),
+        stencil: wgpu::StencilState::default(),
+        bias: wgpu::DepthBiasState::default(),
+    }
+}
+
+/// Begins a render pass into `target` (clearing it; loading the depth buffer the occluder was
+/// written into); with `timestamps` = (set, pass index), writes the pass's begin and end times
+/// at 2·index and 2·index + 1.
+fn begin_pass<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    target: &Target<'_>,
+    timestamps: Option<(&wgpu::QuerySet, u32)>,
+) -> wgpu::RenderPass<'e> {
+    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some("sky"),
+        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+            view: target.view,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations { load: wgpu::LoadOp::Clear(target.clear), store: wgpu::StoreOp::Store },
+        })],
+        depth_stencil_attachment: target.depth.map(|(view, _)| wgpu::RenderPassDepthStencilAttachment {
+            view,
+            depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Discard }),
+            stencil_ops: None,
+        }),
+        timestamp_writes: timestamps.map(|(query_set, index)| wgpu::RenderPassTimestampWrites {
+            query_set,
+            beginning_of_pass_write_index: Some(2 * index),
+            end_of_pass_write_index: Some(2 * index + 1),
+        }),
+        occlusion_query_set: None,
+        multiview_mask: None,
+    })
 }
 
 /// Compiles and renders once: [`SkyShader::new`] without sub-passes, then
