@@ -188,3 +188,49 @@ fn bake_scene_bakes_what_the_scene_fixes() {
     let m = skyrun::compare(&pixels(&b), &pixels(&a), 1e-4);
     assert!(m.max_rel < 1e-5, "{m:?}");
 }
+
+#[test]
+fn occluder_and_sky_resolution_map_to_the_flags() {
+    let dir = scratch("scene_files", "skip");
+    // Any PNG is a mask (white = covered): a preview of a sky, bright near the horizon.
+    let mask = dir.join("mask.png");
+    let out = gdsky(&[
+        "render",
+        "--size",
+        "32x16",
+        "-o",
+        &dir.join("m.exr").display().to_string(),
+        "--png",
+        &mask.display().to_string(),
+    ]);
+    assert!(out.status.success(), "{}", text(&out));
+    let scene = write(
+        &dir,
+        "s.toml",
+        "size = [32, 16]\noccluder = \"mask.png\"\nsky_resolution = \"half\"\n[uniforms]\nview_samples = 4\n",
+    );
+    let (a, b, c) = (dir.join("a.exr"), dir.join("b.exr"), dir.join("c.exr"));
+    let out = gdsky(&["render", &scene, "-o", &a.display().to_string()]);
+    assert!(out.status.success(), "{}", text(&out));
+    let flags = [
+        "render",
+        "--size",
+        "32x16",
+        "--set",
+        "view_samples=4",
+        "--occluder",
+        &mask.display().to_string(),
+        "--sky-resolution",
+        "half",
+        "-o",
+        &b.display().to_string(),
+    ];
+    let out = gdsky(&flags);
+    assert!(out.status.success(), "{}", text(&out));
+    assert_eq!(pixels(&a), pixels(&b));
+    assert!(pixels(&a).contains(&[0.0, 0.0, 0.0, 1.0]), "some pixels are occluded");
+    // --sky-resolution on the command line wins over the scene's.
+    let out = gdsky(&["render", &scene, "--sky-resolution", "full", "-o", &c.display().to_string()]);
+    assert!(out.status.success(), "{}", text(&out));
+    assert_ne!(pixels(&a), pixels(&c));
+}

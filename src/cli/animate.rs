@@ -34,7 +34,9 @@
 //! reuse, then — unless `--no-baseline` — rendered again with every face of every frame
 //! rendered and nothing written: the time of rendering every frame, measured in the same run.
 
-use super::scene::{ProjectionArg, SceneArgs, check_scene_uniforms, load_shader_baking, open_gpu, open_input, strip};
+use super::scene::{
+    ProjectionArg, SceneArgs, SkipArgs, check_scene_uniforms, load_shader_baking, open_gpu, open_input, strip,
+};
 use super::{environment, usage};
 use clap::{ArgMatches, Args};
 use gdsky::scene::{Animation, RadianceMode, SceneFile};
@@ -66,6 +68,10 @@ pub struct AnimateArgs {
     /// replaces the sun's keyframes too).
     #[command(flatten)]
     scene: SceneArgs,
+    /// Occluder and sky resolution, as `render`'s (the scene file's `occluder` and
+    /// `sky_resolution` unless given here).
+    #[command(flatten)]
+    skip: SkipArgs,
 }
 
 /// One frame's scene and what the shader sees of it.
@@ -150,7 +156,6 @@ fn animate(args: &AnimateArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
     }
     let input = open_input(Some(&args.scene_file))?;
     let file: &SceneFile = input.scene.as_ref().ok_or(ExitCode::from(1))?;
-    super::render::warn_unapplied(file);
     let anim = file.animate.clone().unwrap_or(Animation {
         frames: 1,
         dt: 1.0 / 24.0,
@@ -166,15 +171,16 @@ fn animate(args: &AnimateArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
     });
     let mut base = args.scene.clone();
     base.merge_file(file, matches);
-    let given = |id: &str| {
-        matches.try_contains_id(id).unwrap_or(false)
-            && matches.value_source(id) == Some(clap::parser::ValueSource::CommandLine)
-    };
+    let mut skip = args.skip.clone();
+    skip.merge_file(file, matches);
+    let given = |id: &str| super::scene::given(matches, id);
     let (views, width, height) = base.views().map_err(usage)?;
     let camera = base.projection == Some(ProjectionArg::Camera);
     let cubemap = base.projection == Some(ProjectionArg::Cubemap);
     let incremental = cubemap && anim.radiance_mode == RadianceMode::Incremental;
     let overrides = base.overrides().map_err(usage)?;
+    let occluder = skip.occluder(&views, width, height)?;
+    let options = skip.options(occluder.as_ref());
     let names: Vec<String> = (0..anim.frames)
         .flat_map(|k| [format!("frame_{k:04}.exr"), format!("frame_{k:04}.png")])
         .chain(["animate.csv".to_string()])
@@ -219,10 +225,13 @@ fn animate(args: &AnimateArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
     let gpu = open_gpu()?;
     let shader = loaded.compile(&gpu)?;
     let render_view = |frame: &Frame, view: Projection| -> Result<Vec<[f32; 4]>, ExitCode> {
-        shader.render(&gpu, view, width, height, &frame.builtins, &frame.material).map(|r| r.pixels).map_err(|err| {
-            eprintln!("error: {err}");
-            ExitCode::from(1)
-        })
+        shader
+            .render_with(&gpu, view, width, height, &frame.builtins, &frame.material, &options)
+            .map(|r| r.pixels)
+            .map_err(|err| {
+                eprintln!("error: {err}");
+                ExitCode::from(1)
+            })
     };
     // Warm-up: the driver compiles the pipeline on the first render; neither pass pays for it.
     render_view(&frames[0], views[0])?;
@@ -280,7 +289,11 @@ fn animate(args: &AnimateArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
     super::write_file(&csv_path, csv.as_bytes()).map_err(environment)?;
 
     let n = anim.frames;
-    let mode = if cubemap { format!(", cubemap {:?}", anim.radiance_mode) } else { String::new() };
+    let mode = match (cubemap, anim.radiance_mode) {
+        (false, _) => "",
+        (true, RadianceMode::RealTime) => ", cubemap real_time",
+        (true, RadianceMode::Incremental) => ", cubemap incremental",
+    };
     println!(
         "animate: {n} frames {width}x{height}{mode}: rendered {rendered}, reused {reused} ({faces_rendered} of {} views rendered)",
         n as usize * views.len()
@@ -308,11 +321,11 @@ fn animate(args: &AnimateArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
         }
         let all = t0.elapsed();
         println!(
-            "every frame: rendering {:.1} ms ({} views); reuse took {:.1} % of it ({:.1}× faster)",
+            "every frame: rendering {:.1} ms ({} views); with reuse {:.1} ms = {:.1} % of it",
             ms(all),
             n as usize * views.len(),
+            ms(render_time),
             100.0 * ms(render_time) / ms(all).max(1e-9),
-            ms(all) / ms(render_time).max(1e-9)
         );
     }
     println!("wrote {} frames (EXR, PNG) and {} in {}", n, csv_path.display(), args.out_dir.display());

@@ -206,7 +206,7 @@ fn bench(args: &BenchArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
     let mut scene_args = args.scene.clone();
     if let Some(file) = &input.scene {
         scene_args.merge_file(file, matches);
-        super::render::warn_unapplied(file);
+        super::render::warn_unapplied(file, "bench");
     }
     let args = &BenchArgs {
         file: input.shader.clone(),

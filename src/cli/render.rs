@@ -45,15 +45,16 @@ pub fn run(args: &RenderArgs, matches: &ArgMatches) -> ExitCode {
 fn render(args: &RenderArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
     let input = open_input(args.file.as_deref())?;
     let mut scene_args = args.scene.clone();
+    let mut skip = args.skip.clone();
     if let Some(file) = &input.scene {
         scene_args.merge_file(file, matches);
-        warn_unapplied(file);
+        skip.merge_file(file, matches);
     }
     let (views, width, height) = scene_args.views().map_err(usage)?;
     let overrides = scene_args.overrides().map_err(usage)?;
     check_outputs(&args.out, args.png.as_ref())?;
-    let occluder = args.skip.occluder(&views, width, height)?;
-    let options = args.skip.options(occluder.as_ref());
+    let occluder = skip.occluder(&views, width, height)?;
+    let options = skip.options(occluder.as_ref());
     let started = Instant::now();
     let cli_sets = args.scene.overrides().map_err(usage)?;
     let loaded = load_shader_baking(input.shader.as_deref(), |shader| {
@@ -96,20 +97,13 @@ fn render(args: &RenderArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
     write_outputs(&image, &args.out, args.png.as_ref())
 }
 
-/// Says which keys of a scene file this command does not apply yet (the occluder and the sky
-/// resolution wait for their flags).
-pub fn warn_unapplied(file: &gdsky::scene::SceneFile) {
-    if file.occluder.is_some() {
-        eprintln!(
-            "warning: {}: `occluder` is read but not applied yet (no --occluder in this build)",
-            file.path.display()
-        );
-    }
-    if file.sky_resolution.is_some() {
-        eprintln!(
-            "warning: {}: `sky_resolution` is read but not applied yet (no --sky-resolution in this build)",
-            file.path.display()
-        );
+/// Says which keys of a scene file a command does not apply (`bench` measures the
+/// full-resolution, unoccluded sky its truth describes).
+pub fn warn_unapplied(file: &gdsky::scene::SceneFile, command: &str) {
+    for (key, set) in [("occluder", file.occluder.is_some()), ("sky_resolution", file.sky_resolution.is_some())] {
+        if set {
+            eprintln!("warning: {}: `{key}` does not apply to `{command}`; ignored", file.path.display());
+        }
     }
 }
 

@@ -100,10 +100,7 @@ impl SceneArgs {
     /// from a default). The scene's uniforms come first in `--set`, so a `--set` of the same
     /// uniform wins.
     pub fn merge_file(&mut self, file: &SceneFile, matches: &ArgMatches) {
-        let given = |id: &str| {
-            matches.try_contains_id(id).unwrap_or(false)
-                && matches.value_source(id) == Some(clap::parser::ValueSource::CommandLine)
-        };
+        let given = |id: &str| given(matches, id);
         if !given("projection")
             && let Some(p) = file.projection
         {
@@ -260,6 +257,23 @@ pub struct SkipArgs {
 }
 
 impl SkipArgs {
+    /// Takes the scene file's `occluder` and `sky_resolution` where `--occluder` and
+    /// `--sky-resolution` were not given on the command line.
+    pub fn merge_file(&mut self, file: &SceneFile, matches: &ArgMatches) {
+        if !given(matches, "occluder") && file.occluder.is_some() {
+            self.occluder = file.occluder.clone();
+        }
+        if !given(matches, "sky_resolution")
+            && let Some(r) = file.sky_resolution
+        {
+            self.sky_resolution = match r {
+                gdsky::scene::SkyResolution::Full => SkyResolution::Full,
+                gdsky::scene::SkyResolution::Half => SkyResolution::Half,
+                gdsky::scene::SkyResolution::Quarter => SkyResolution::Quarter,
+            };
+        }
+    }
+
     /// Reads the occluder mask for `views` of `width`×`height` (before any GPU work). Exit 2
     /// when the file cannot be read (missing, not a regular file, over
     /// [`skyrun::MAX_MASK_BYTES`]), 1 when it is not a PNG or the projection is a cubemap.
@@ -377,6 +391,12 @@ impl LoadedShader {
                 ExitCode::from(1)
             })
     }
+}
+
+/// Whether the flag `id` was given on the command line (not a default, not absent).
+pub fn given(matches: &ArgMatches, id: &str) -> bool {
+    matches.try_contains_id(id).unwrap_or(false)
+        && matches.value_source(id) == Some(clap::parser::ValueSource::CommandLine)
 }
 
 /// What a command's FILE argument names: a shader, or a scene file and its shader.
