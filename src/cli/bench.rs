@@ -69,6 +69,8 @@ pub struct BenchArgs {
     cache_dir: Option<PathBuf>,
     #[command(flatten)]
     scene: SceneArgs,
+    #[command(flatten)]
+    skipping: super::bench_skip::SkippingArgs,
 }
 
 /// Largest sample count of the truth (`--truth-samples`): 16× the default view samples; the f64
@@ -214,6 +216,7 @@ fn bench(args: &BenchArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
         knobs: args.knobs.clone(),
         out_dir: args.out_dir.clone(),
         cache_dir: args.cache_dir.clone(),
+        skipping: args.skipping.clone(),
         ..*args
     };
     let (views, width, height) = args.scene.views().map_err(usage)?;
@@ -377,6 +380,29 @@ fn bench(args: &BenchArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
     println!("Pareto front (no other configuration both faster and more accurate):");
     print!("{}", front_table(&knobs, &rows));
     println!("wrote    {} and {}", csv_path.display(), png_path.display());
+    if args.skipping.skipping {
+        let base_material = sweep::material(&loaded, &base).map_err(|e| usage(e.to_string()))?;
+        let base_truth = converged.params(&base);
+        let truth = truths.iter().find(|(p, _)| *p == base_truth).or(truths.first()).ok_or(ExitCode::from(1))?;
+        let cx = super::bench_skip::Context {
+            gpu: &gpu,
+            shader: &shader,
+            name: shader_name.clone(),
+            views: &views,
+            width,
+            height,
+            builtins: &builtins,
+            material: &base_material,
+            truth: &truth.1,
+            runs: args.runs,
+        };
+        let rows = super::bench_skip::run(&cx, &args.skipping)?;
+        println!("skipping (the shader's defaults; occluder ratio = time / time at 0 %, resolution = speed-up):");
+        print!("{}", super::bench_skip::table(&rows));
+        let path = args.out_dir.join("skipping.csv");
+        super::write_file(&path, super::bench_skip::csv(&rows).as_bytes()).map_err(environment)?;
+        println!("wrote    {}", path.display());
+    }
     Ok(())
 }
 

@@ -2,6 +2,7 @@
 
 pub mod animate;
 pub mod bench;
+pub mod bench_skip;
 pub mod check;
 pub mod compare;
 pub mod convert;
