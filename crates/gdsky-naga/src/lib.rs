@@ -38,7 +38,8 @@ pub const UNSUPPORTED: &str = "E600";
 pub const INVALID_MODULE: &str = "E601";
 /// Diagnostic code for a back end that could not write the module.
 pub const BACKEND: &str = "E602";
-/// Diagnostic code for a `--set NAME=VALUE` that names no uniform or does not fit its type.
+/// Diagnostic code for a `--set NAME=VALUE` that names no uniform or does not fit its type, or an
+/// `--override NAME` that names no scalar material uniform.
 pub const BAD_SET: &str = "E603";
 /// Diagnostic code for emitted WGSL or SPIR-V that naga's own front end cannot read back or
 /// validate (a bug in gdsky's translation; nothing is written).
@@ -152,6 +153,50 @@ fn lower_here(front: &FrontendOutput, baked: &HashMap<String, String>) -> Result
     };
     let info = validate(front, &module).map_err(|d| vec![d])?;
     Ok(Lowered { module, info, uniforms, material_size, textures })
+}
+
+/// Like [`lower_with`], and each uniform named in `overrides` becomes a WGSL `override` (`@id(k)`
+/// for the k-th name, defaulting to the uniform's default; a `bool` as a `u32` 0 or 1) instead of
+/// a member of the material block: one module serves many values, given when the pipeline is
+/// created (wgpu's `PipelineCompilationOptions::constants`, keyed by the id as text). Only scalar
+/// material uniforms can be overrides; naga 30 writes them to WGSL but not to SPIR-V.
+pub fn lower_with_overrides(
+    front: &FrontendOutput,
+    baked: &HashMap<String, String>,
+    overrides: &[String],
+) -> Result<Lowered, Vec<Diagnostic>> {
+    let mut lowered = lower_with(front, baked)?;
+    if overrides.is_empty() {
+        return Ok(lowered);
+    }
+    let Some(shader) = front.shader.as_ref() else {
+        return Err(front.diagnostics.clone());
+    };
+    let mut errors = Vec::new();
+    for (i, name) in overrides.iter().enumerate() {
+        let why = match shader.uniforms.iter().find(|u| &u.name == name) {
+            None => Some(format!("the shader has no uniform `{name}`")),
+            Some(_) if baked.contains_key(name) => Some("it is baked by `--set` too".to_string()),
+            Some(_) if overrides[..i].contains(name) => Some("it is named twice".to_string()),
+            Some(u) if u.global || !matches!(u.ty, gdshader::check::types::Type::Scalar(_)) => Some(format!(
+                "only scalar material uniforms can be overrides (WGSL overrides are scalars); `{name}` is a{} `{}`",
+                if u.global { " global" } else { "" },
+                u.type_name
+            )),
+            Some(_) if !lowered.uniforms.contains_key(name) => Some(format!("`{name}` has no place in the material block")),
+            Some(_) => None,
+        };
+        if let Some(why) = why {
+            errors.push(Diagnostic::error(BAD_SET, format!("`--override {name}`: {why}")));
+        }
+    }
+    if !errors.is_empty() {
+        return Err(errors);
+    }
+    opt::overrides::apply(&mut lowered, shader, overrides);
+    opt::optimize(&mut lowered.module);
+    lowered.info = validate(front, &lowered.module).map_err(|d| vec![d])?;
+    Ok(lowered)
 }
 
 /// Validates a module lowered from `front` with naga; an error comes back as a diagnostic at

@@ -90,7 +90,8 @@ fn value_json(v: &ConstValue) -> Value {
 }
 
 /// The reflection of a converted shader. `baked` lists the uniforms `--set` turned into
-/// constants, with their values.
+/// constants, with their values; `overrides` the uniforms `--override` turned into WGSL
+/// overrides, with their ids and defaults; `uniforms` the rest.
 pub fn reflection(name: &str, shader: &CheckedShader, lowered: &Lowered, baked: &HashMap<String, String>) -> Value {
     let structs = shader.struct_names();
     let uniforms: Vec<Value> = shader
@@ -210,6 +211,7 @@ pub fn reflection(name: &str, shader: &CheckedShader, lowered: &Lowered, baked: 
         "depth": depth_json(&lowered.module),
         "uniforms": uniforms,
         "baked": baked.iter().map(|(k, v)| (k.clone(), json!(v))).collect::<serde_json::Map<_, _>>(),
+        "overrides": overrides(shader, lowered),
         "builtins_used": used,
         "render_modes": shader.render_modes,
         "passes": passes,
@@ -242,6 +244,28 @@ fn depth_json(module: &naga::Module) -> Value {
         }),
         None => Value::Null,
     }
+}
+
+/// The module's overrides (`--override NAME`): name, `@id` (the key of a pipeline constant),
+/// the uniform's type and the override's default (a `bool` is given as 0 or 1).
+fn overrides(shader: &CheckedShader, lowered: &Lowered) -> Vec<Value> {
+    let module = &lowered.module;
+    module
+        .overrides
+        .iter()
+        .map(|(_, o)| {
+            let default = o.init.map(|h| match module.global_expressions[h] {
+                // The shortest text of the f32 (62.832, not 62.832000732421875).
+                naga::Expression::Literal(naga::Literal::F32(v)) => json!(v.to_string().parse::<f64>().unwrap_or(0.0)),
+                naga::Expression::Literal(naga::Literal::I32(v)) => json!(v),
+                naga::Expression::Literal(naga::Literal::U32(v)) => json!(v),
+                naga::Expression::Literal(naga::Literal::Bool(v)) => json!(v),
+                _ => Value::Null,
+            });
+            let ty = shader.uniforms.iter().find(|u| Some(&u.name) == o.name.as_ref()).map(|u| u.type_name.clone());
+            json!({ "name": o.name, "id": o.id, "type": ty, "default": default })
+        })
+        .collect()
 }
 
 #[cfg(test)]

@@ -8,6 +8,12 @@
 //! after a warm-up render that includes the driver's shader compilation; resource creation and
 //! read-back are outside it.
 //!
+//! Beside them, specialization (issue #11): `baked_at_defaults` is the converted sky with every
+//! uniform baked at its default (`gdsky convert --set`, folded through the module), and
+//! `overrides_at_defaults` every scalar uniform as a WGSL `override` at its default
+//! (`--override`; wgpu gives the values at pipeline creation). The bench prints each one's
+//! speed against the generic converted module.
+//!
 //! `cargo bench -p skyrun --bench render`
 
 use criterion::{Criterion, criterion_group, criterion_main};
@@ -48,6 +54,22 @@ fn render_time(c: &mut Criterion) {
     let stable_lowered = gdsky_naga::lower(&stable_front).expect("the stable sky lowers");
     let stable = gdsky_naga::to_wgsl(&stable_lowered).expect("WGSL");
     assert_eq!(freeman_material(&stable_lowered, &FreemanParams::default()), material, "same material layout");
+    // Specialization (issue #11): every uniform baked at its default (`--set`), and every scalar
+    // uniform as a WGSL override (`--override`) at its default.
+    let shader = front.shader.as_ref().expect("checked");
+    let baked_lowered = gdsky_naga::lower_with(&front, &defaults(shader)).expect("the baked sky lowers");
+    let baked = gdsky_naga::to_wgsl(&baked_lowered).expect("WGSL");
+    let baked_material = freeman_material(&baked_lowered, &FreemanParams::default());
+    let scalars: Vec<String> = shader
+        .uniforms
+        .iter()
+        .filter(|u| matches!(u.ty, gdshader::check::types::Type::Scalar(_)))
+        .map(|u| u.name.clone())
+        .collect();
+    let override_lowered =
+        gdsky_naga::lower_with_overrides(&front, &Default::default(), &scalars).expect("the override sky lowers");
+    let overridden = gdsky_naga::to_wgsl(&override_lowered).expect("WGSL");
+    let override_material = freeman_material(&override_lowered, &FreemanParams::default());
     let gpu = Gpu::new().unwrap_or_else(|e| panic!("the render bench needs a Vulkan adapter: {e}"));
     eprintln!("adapter: {}", gpu.adapter_info());
 
@@ -63,13 +85,17 @@ fn render_time(c: &mut Criterion) {
         ("hand_written", HAND_PORT),
         ("hand_written_max_num", &hand_max_num),
         ("freeman_stable_converted", &stable),
+        ("baked_at_defaults", &baked),
+        ("overrides_at_defaults", &overridden),
     ];
-    let shaders: Vec<(&str, SkyShader)> = variants
+    let materials = [&material, &material, &material, &material, &baked_material, &override_material];
+    let shaders: Vec<(&str, SkyShader, &Vec<u8>)> = variants
         .into_iter()
-        .map(|(name, wgsl)| (name, SkyShader::new(&gpu, wgsl, SubPasses::default()).expect("compiles")))
+        .zip(materials)
+        .map(|((name, wgsl), m)| (name, SkyShader::new(&gpu, wgsl, SubPasses::default()).expect("compiles"), m))
         .collect();
-    let render = |shader: &SkyShader| {
-        shader.render(&gpu, Projection::Panorama, width, height, &builtins, &material).expect("renders").gpu_wait
+    let render = |shader: &SkyShader, material: &[u8]| {
+        shader.render(&gpu, Projection::Panorama, width, height, &builtins, material).expect("renders").gpu_wait
     };
 
     // The machine is shared and noisy: besides criterion's groups (one after the other), time
@@ -77,8 +103,8 @@ fn render_time(c: &mut Criterion) {
     // of the medians.
     let mut times: Vec<Vec<Duration>> = vec![Vec::new(); shaders.len()];
     for round in 0..41 {
-        for (i, (_, shader)) in shaders.iter().enumerate() {
-            let t = render(shader);
+        for (i, (_, shader, material)) in shaders.iter().enumerate() {
+            let t = render(shader, material);
             if round > 0 {
                 times[i].push(t);
             }
@@ -89,19 +115,40 @@ fn render_time(c: &mut Criterion) {
         v[v.len() / 2]
     };
     let medians: Vec<Duration> = times.iter_mut().map(median).collect();
-    for ((name, _), m) in shaders.iter().zip(&medians) {
+    for ((name, _, _), m) in shaders.iter().zip(&medians) {
         eprintln!(
-            "interleaved, 40 rounds: {name:<22} median {m:>9.2?}  ratio to hand_written {:.3}",
-            m.as_secs_f64() / medians[1].as_secs_f64()
+            "interleaved, 40 rounds: {name:<24} median {m:>9.2?}  ratio to hand_written {:.3}  to gdsky_converted {:.3}",
+            m.as_secs_f64() / medians[1].as_secs_f64(),
+            m.as_secs_f64() / medians[0].as_secs_f64(),
         );
     }
+    eprintln!(
+        "interleaved, 40 rounds: baked_at_defaults is {:.3}x as fast as gdsky_converted (generic); overrides_at_defaults {:.3}x",
+        medians[0].as_secs_f64() / medians[4].as_secs_f64(),
+        medians[0].as_secs_f64() / medians[5].as_secs_f64(),
+    );
 
     let mut group = c.benchmark_group("freeman_render_256x128_panorama");
     group.sample_size(20).warm_up_time(Duration::from_secs(2)).measurement_time(Duration::from_secs(20));
-    for (name, shader) in &shaders {
-        group.bench_function(*name, |b| b.iter_custom(|iters| (0..iters).map(|_| render(shader)).sum()));
+    for (name, shader, material) in &shaders {
+        group.bench_function(*name, |b| b.iter_custom(|iters| (0..iters).map(|_| render(shader, material)).sum()));
     }
     group.finish();
+}
+
+/// Every scalar and vector uniform of `shader` at its default, as `--set` texts.
+fn defaults(shader: &gdshader::CheckedShader) -> std::collections::HashMap<String, String> {
+    use gdshader::check::consteval::ConstValue;
+    fn text(v: &ConstValue) -> String {
+        match v {
+            ConstValue::Bool(b) => b.to_string(),
+            ConstValue::Int(i) => i.to_string(),
+            ConstValue::UInt(u) => u.to_string(),
+            ConstValue::Float(f) => format!("{f:?}"),
+            ConstValue::Composite(items) => items.iter().map(text).collect::<Vec<_>>().join(","),
+        }
+    }
+    shader.uniforms.iter().filter_map(|u| Some((u.name.clone(), text(u.default.as_ref()?)))).collect()
 }
 
 criterion_group!(benches, render_time);

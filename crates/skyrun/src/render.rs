@@ -170,6 +170,9 @@ pub struct SkyShader {
     repeat_sampler: wgpu::Sampler,
     clamp_sampler: wgpu::Sampler,
     texture_defaults: Vec<((u32, u32), [f32; 4])>,
+    /// Values of the module's overrides (`gdsky convert --override`), by `@id` as text; an
+    /// override not listed keeps its default.
+    constants: Vec<(String, f64)>,
     /// The depth `vs_main` gives the sky: its far plane (1 standard Z, 0 reversed Z), read from
     /// the module ([`gdsky_naga::wrapper::far_plane_depth`]); 1 when it cannot be read.
     far: f32,
@@ -244,6 +247,7 @@ impl SkyShader {
                 repeat_sampler: sampler(wgpu::AddressMode::Repeat),
                 clamp_sampler: sampler(wgpu::AddressMode::ClampToEdge),
                 texture_defaults: Vec::new(),
+                constants: Vec::new(),
                 far,
                 upsample: Mutex::new(HashMap::new()),
             }
@@ -256,6 +260,16 @@ impl SkyShader {
     #[must_use]
     pub fn with_texture_defaults(mut self, defaults: Vec<((u32, u32), [f32; 4])>) -> Self {
         self.texture_defaults = defaults;
+        self
+    }
+
+    /// Values for the module's overrides (WGSL `override`, `gdsky convert --override`), keyed by
+    /// `@id` as text (`"0"`) or by name for an override without an id, given to every pipeline
+    /// (wgpu's `PipelineCompilationOptions::constants`); an override not listed keeps its
+    /// default.
+    #[must_use]
+    pub fn with_constants(mut self, constants: Vec<(String, f64)>) -> Self {
+        self.constants = constants;
         self
     }
 
@@ -292,6 +306,8 @@ impl SkyShader {
         depth: Option<wgpu::CompareFunction>,
     ) -> wgpu::RenderPipeline {
         let mut cache = self.pipelines.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+        let constants: Vec<(&str, f64)> = self.constants.iter().map(|(k, v)| (k.as_str(), *v)).collect();
+        let options = || wgpu::PipelineCompilationOptions { constants: &constants, ..Default::default() };
         cache
             .entry((entry, format, depth))
             .or_insert_with(|| {
@@ -301,7 +317,7 @@ impl SkyShader {
                     vertex: wgpu::VertexState {
                         module: &self.module,
                         entry_point: Some("vs_main"),
-                        compilation_options: Default::default(),
+                        compilation_options: options(),
                         buffers: &[],
                     },
                     primitive: wgpu::PrimitiveState {
@@ -314,7 +330,7 @@ impl SkyShader {
                     fragment: Some(wgpu::FragmentState {
                         module: &self.module,
                         entry_point: Some(entry),
-                        compilation_options: Default::default(),
+                        compilation_options: options(),
                         targets: &[Some(wgpu::ColorTargetState {
                             format,
                             blend: None,

@@ -6,8 +6,9 @@
 //! entry point needs. It never changes a value the shader computes: the images of the Freeman
 //! sky stay bit-identical to the hand-written port (`crates/skyrun/tests/hand_port.rs`).
 //!
-//! * **Pruning** (`prune.rs`): functions no entry point calls are dropped; constants no function
-//!   reads lose their name, so that naga's compaction (`naga::compact::compact` with
+//! * **Pruning** (`prune.rs`): functions no entry point calls are dropped; `let` values nothing
+//!   reads and constants no function reads lose their name (`uses.rs` finds what a function
+//!   uses), so that naga's compaction (`naga::compact::compact` with
 //!   `KeepUnused::Yes`) drops them with the anonymous types and the expressions nothing uses —
 //!   a value the source computes and never reads leaves no code. Global variables stay: each is
 //!   a binding a host may set (built-ins read by no code were never declared: the wrapper only
@@ -25,8 +26,19 @@
 //!   around `max`, with the same IEEE maxNum result (`calls.rs`, `max_num`);
 //! * an `if` on a constant condition (a baked `bool`, a comparison of baked values) lowers only
 //!   the branch taken (`stmt.rs`).
+//!
+//! **Overrides** (`overrides.rs`, `--override NAME`, [`crate::lower_with_overrides`]): a scalar
+//! uniform becomes a WGSL `override` with an `@id` and the uniform's default, so one module
+//! serves many values, set when the pipeline is created (wgpu's
+//! `PipelineCompilationOptions::constants`, keyed by the id). The loads of the uniform's member
+//! of the material block become the override's value in place; the member itself stays (unread),
+//! so the block's layout is the same whichever uniforms are overridden. naga 30's SPIR-V writer
+//! has no specialization constants (it refuses any override), so a module with overrides is
+//! WGSL only.
 
+pub(crate) mod overrides;
 mod prune;
+mod uses;
 
 /// Runs every pass on a lowered module.
 pub fn optimize(module: &mut naga::Module) {

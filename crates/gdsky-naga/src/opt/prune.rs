@@ -4,11 +4,17 @@ use naga::{Arena, Block, Expression, Function, Handle, Module, Statement};
 use std::collections::HashSet;
 
 /// Removes the functions no entry point calls (directly or through other functions), takes the
-/// names off the constants no function reads (naga's compaction keeps every named constant), and
+/// names off the `let` values nothing reads and the constants no function reads (naga's compaction keeps every named constant), and
 /// compacts the module: unused constants, anonymous types and expressions go; global variables
 /// (every binding a host may set), named types and entry points stay, with their handles.
 pub fn prune(module: &mut Module) {
     prune_functions(module);
+    for (_, f) in module.functions.iter_mut() {
+        super::uses::unname_unused(f);
+    }
+    for ep in &mut module.entry_points {
+        super::uses::unname_unused(&mut ep.function);
+    }
     unname_unused_constants(module);
     naga::compact::compact(module, naga::compact::KeepUnused::Yes);
 }

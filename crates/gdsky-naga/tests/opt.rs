@@ -1,0 +1,161 @@
+//! The optimizing stage and specialization (issue #11): pruning, the clean-up the lowering
+//! does, `--set` through control flow, `--override`.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+fn front(source: &str) -> gdshader::FrontendOutput {
+    let front = gdshader::check_source("test.gdshader", source.as_bytes().to_vec(), None, &mut gdshader::FsLoader);
+    assert!(front.shader.is_some(), "{:?}", front.diagnostics);
+    front
+}
+
+fn freeman() -> gdshader::FrontendOutput {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/freeman_sky.gdshader");
+    gdshader::check_file(&path).expect("fixture readable")
+}
+
+fn wgsl(front: &gdshader::FrontendOutput) -> String {
+    gdsky_naga::to_wgsl(&gdsky_naga::lower(front).expect("lowers")).expect("WGSL")
+}
+
+/// The text of `fn sky()` in emitted WGSL.
+fn sky_body(w: &str) -> &str {
+    let start = w.find("fn sky(").expect("a sky function");
+    let end = w[start..].find("\n}\n").map_or(w.len(), |e| start + e);
+    &w[start..end]
+}
+
+#[test]
+fn unread_builtins_leave_no_loads() {
+    let w = wgsl(&front("shader_type sky;\nvoid sky() { COLOR = EYEDIR * 0.5 + LIGHT0_DIRECTION * LIGHT0_ENERGY; }\n"));
+    for field in [".time", ".position", "lights[1]", "lights[2]", "lights[3]", "SKY_COORDS", "SCREEN_UV", "FOG"] {
+        assert!(!w.contains(field), "`{field}` is loaded though the shader does not read it:\n{w}");
+    }
+    assert!(w.contains("lights[0]"), "{w}");
+}
+
+#[test]
+fn unused_functions_and_constants_are_not_emitted() {
+    let w = wgsl(&front(
+        "shader_type sky;\nconst float UNUSED_K = 3.0;\nconst float USED_K = 2.0;\n\
+         float helper(float x) { return x * UNUSED_K; }\n\
+         float twice(float x) { return x * USED_K; }\n\
+         float unused_caller(float x) { return helper(x); }\n\
+         void sky() { float dead = sin(EYEDIR.x); COLOR = vec3(twice(EYEDIR.y)); }\n",
+    ));
+    assert!(!w.contains("fn helper") && !w.contains("fn unused_caller"), "{w}");
+    assert!(!w.contains("UNUSED_K"), "{w}");
+    assert!(w.contains("fn twice"), "{w}");
+    assert!(!sky_body(&w).contains("sin("), "a value nothing reads is dropped:\n{w}");
+}
+
+#[test]
+fn never_written_locals_are_lets() {
+    let w = wgsl(&front(
+        "shader_type sky;\nvoid sky() { float a = EYEDIR.x * 2.0; float b = a + 1.0; float c = 0.0; \
+         c += b; COLOR = vec3(a, b, c); }\n",
+    ));
+    assert!(w.contains("let a = ") && w.contains("let b = "), "{w}");
+    assert!(w.contains("var c: f32"), "an assigned local stays a variable:\n{w}");
+    assert!(!w.contains("var a") && !w.contains("var b"), "{w}");
+}
+
+#[test]
+fn max_against_a_constant_is_one_select() {
+    let w =
+        wgsl(&front("shader_type sky;\nvoid sky() { COLOR = vec3(max(0.0, EYEDIR.y), min(EYEDIR.x, 1.0), 0.0); }\n"));
+    assert!(w.contains("> 0f"), "{w}");
+    assert!(w.contains("< 1f"), "{w}");
+    assert!(!w.contains("bitcast"), "no NaN bit tests against a constant:\n{w}");
+    // Between two run-time values the NaN tests stay.
+    let w = wgsl(&front("shader_type sky;\nvoid sky() { COLOR = vec3(max(EYEDIR.x, EYEDIR.y)); }\n"));
+    assert!(w.contains("bitcast<u32>"), "{w}");
+}
+
+#[test]
+fn a_baked_bool_removes_the_branch_not_taken() {
+    let source = "shader_type sky;\nuniform bool fancy = false;\nuniform float k = 1.0;\n\
+                  void sky() { if (fancy) { COLOR = vec3(sin(EYEDIR.x)); } else if (k > 2.0) { COLOR = vec3(cos(EYEDIR.y)); } \
+                  else { COLOR = vec3(EYEDIR.z); } }\n";
+    let f = front(source);
+    let generic = wgsl(&f);
+    let generic = sky_body(&generic);
+    assert!(generic.contains("sin(") && generic.contains("cos("), "{generic}");
+    let baked: HashMap<String, String> = [("fancy".to_string(), "false".to_string())].into();
+    let w = gdsky_naga::to_wgsl(&gdsky_naga::lower_with(&f, &baked).expect("lowers")).expect("WGSL");
+    let w = sky_body(&w);
+    assert!(!w.contains("sin("), "the branch of a false baked bool is gone:\n{w}");
+    assert!(w.contains("cos("), "{w}");
+    let baked: HashMap<String, String> = [("fancy".to_string(), "false".into()), ("k".into(), "1.0".into())].into();
+    let w = gdsky_naga::to_wgsl(&gdsky_naga::lower_with(&f, &baked).expect("lowers")).expect("WGSL");
+    let w = sky_body(&w);
+    assert!(!w.contains("sin(") && !w.contains("cos(") && !w.contains("if "), "only the else is left:\n{w}");
+    let baked: HashMap<String, String> = [("fancy".to_string(), "true".to_string())].into();
+    let w = gdsky_naga::to_wgsl(&gdsky_naga::lower_with(&f, &baked).expect("lowers")).expect("WGSL");
+    let w = sky_body(&w);
+    assert!(w.contains("sin(") && !w.contains("cos(") && !w.contains("if "), "only the taken branch:\n{w}");
+}
+
+#[test]
+fn three_sets_on_the_freeman_sky_remove_three_uniforms_and_shrink_the_spirv() {
+    let f = freeman();
+    let generic = gdsky_naga::lower(&f).expect("lowers");
+    let baked: HashMap<String, String> = [
+        ("view_samples".to_string(), "24".to_string()),
+        ("sun_samples".into(), "8".into()),
+        ("ozone_width".into(), "30000.0".into()),
+    ]
+    .into();
+    let set = gdsky_naga::lower_with(&f, &baked).expect("lowers");
+    assert_eq!(set.uniforms.len() + 3, generic.uniforms.len());
+    for n in baked.keys() {
+        assert!(!set.uniforms.contains_key(n));
+    }
+    let (a, b) = (gdsky_naga::to_spirv(&generic).expect("SPIR-V"), gdsky_naga::to_spirv(&set).expect("SPIR-V"));
+    eprintln!("SPIR-V words: generic {}, three --set {}", a.len(), b.len());
+    assert!(b.len() < a.len(), "SPIR-V: generic {} words, baked {}", a.len(), b.len());
+    assert!(set.material_size < generic.material_size || set.uniforms.len() < generic.uniforms.len());
+}
+
+#[test]
+fn overrides_are_wgsl_overrides_and_listed_in_the_reflection() {
+    let f = freeman();
+    let names = ["sun_intensity".to_string(), "view_samples".to_string()];
+    let lowered = gdsky_naga::lower_with_overrides(&f, &HashMap::new(), &names).expect("lowers");
+    let w = gdsky_naga::to_wgsl(&lowered).expect("WGSL");
+    assert!(w.contains("@id(0) override sun_intensity: f32 = 62.832f;"), "{w}");
+    assert!(w.contains("@id(1) override view_samples: i32 = 24i;"), "{w}");
+    assert!(!w.contains("material.sun_intensity") && !w.contains("material.view_samples"), "{w}");
+    let shader = f.shader.as_ref().expect("checked");
+    let r = gdsky_naga::reflect::reflection("freeman", shader, &lowered, &HashMap::new());
+    let overrides = r["overrides"].as_array().expect("overrides");
+    assert_eq!(overrides.len(), 2);
+    assert_eq!(overrides[1]["name"], "view_samples");
+    assert_eq!(overrides[1]["id"], 1);
+    assert_eq!(overrides[1]["default"], 24);
+    let uniforms: Vec<&str> =
+        r["uniforms"].as_array().expect("uniforms").iter().filter_map(|u| u["name"].as_str()).collect();
+    assert!(!uniforms.contains(&"view_samples") && uniforms.contains(&"sun_samples"), "{uniforms:?}");
+    // naga 30's SPIR-V writer has no specialization constants.
+    assert!(gdsky_naga::to_spirv(&lowered).is_err());
+}
+
+#[test]
+fn bad_overrides_are_refused() {
+    let f = freeman();
+    for (names, baked, why) in [
+        (vec!["nope"], vec![], "has no uniform"),
+        (vec!["sun_wavelengths"], vec![], "only scalar"),
+        (vec!["view_samples"], vec![("view_samples", "8")], "baked"),
+        (vec!["view_samples", "view_samples"], vec![], "twice"),
+    ] {
+        let names: Vec<String> = names.into_iter().map(String::from).collect();
+        let baked: HashMap<String, String> = baked.into_iter().map(|(a, b)| (a.to_string(), b.to_string())).collect();
+        let errors = gdsky_naga::lower_with_overrides(&f, &baked, &names).err().expect("refused");
+        assert!(
+            errors.iter().any(|d| d.code == gdsky_naga::BAD_SET && d.message.contains(why)),
+            "{names:?}: {errors:?}"
+        );
+    }
+}
