@@ -260,11 +260,14 @@ fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
 
 fn texel(p: vec2<i32>) -> vec4<f32> {
     let size = vec2<i32>(params.src_size);
-    var x = clamp(p.x, 0, size.x - 1);
+    // Offsets reach at most 2 texels past an edge: wrap with selects, not `%` (an integer
+    // division, which llvmpipe scalarizes lane by lane: it made this pass cost 3× a cheap sky).
+    var x = p.x;
     if params.wrap_x != 0u {
-        x = ((p.x % size.x) + size.x) % size.x;
+        x = select(x, x + size.x, x < 0);
+        x = select(x, x - size.x, x >= size.x);
     }
-    return textureLoad(src, vec2<i32>(x, clamp(p.y, 0, size.y - 1)), 0);
+    return textureLoad(src, vec2<i32>(clamp(x, 0, size.x - 1), clamp(p.y, 0, size.y - 1)), 0);
 }
 
 fn catmull_rom(t: f32) -> vec4<f32> {
