@@ -74,6 +74,23 @@ fn max_against_a_constant_is_one_select() {
 }
 
 #[test]
+fn clamp_to_a_uniform_bound_has_no_nan_bit_tests() {
+    // max(x, 0.5) is never NaN, so the min against the uniform is one select too (a NaN
+    // uniform yields the max's result, as maxNum does).
+    let w = wgsl(&front(
+        "shader_type sky;\nuniform float top = 2.0;\nvoid sky() { COLOR = vec3(clamp(EYEDIR.y, 0.5, top), \
+         min(max(EYEDIR.x, 0.0), top), 0.0); }\n",
+    ));
+    assert!(!w.contains("bitcast"), "no NaN bit tests when one operand is never NaN:\n{w}");
+    assert_eq!(sky_body(&w).matches("select(").count(), 4, "{w}");
+    // A max of two run-time values may be NaN: the min against it keeps its tests.
+    let w = wgsl(&front(
+        "shader_type sky;\nuniform float top = 2.0;\nvoid sky() { COLOR = vec3(min(max(EYEDIR.x, EYEDIR.y), top)); }\n",
+    ));
+    assert_eq!(sky_body(&w).matches("bitcast<u32>").count(), 4, "{w}");
+}
+
+#[test]
 fn a_baked_bool_removes_the_branch_not_taken() {
     let source = "shader_type sky;\nuniform bool fancy = false;\nuniform float k = 1.0;\n\
                   void sky() { if (fancy) { COLOR = vec3(sin(EYEDIR.x)); } else if (k > 2.0) { COLOR = vec3(cos(EYEDIR.y)); } \

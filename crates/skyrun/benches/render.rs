@@ -89,11 +89,26 @@ fn render_time(c: &mut Criterion) {
         ("overrides_at_defaults", &overridden),
     ];
     let materials = [&material, &material, &material, &material, &baked_material, &override_material];
-    let shaders: Vec<(&str, SkyShader, &Vec<u8>)> = variants
+    let mut shaders: Vec<(&str, SkyShader, &Vec<u8>)> = variants
         .into_iter()
         .zip(materials)
         .map(|((name, wgsl), m)| (name, SkyShader::new(&gpu, wgsl, SubPasses::default()).expect("compiles"), m))
         .collect();
+    // Experiments: `GDSKY_BENCH_WGSL=a.wgsl:b.wgsl` adds WGSL files (the generic material's
+    // layout) to the interleaved rounds, e.g. hand edits of the converted shader that test one
+    // difference from the port at a time.
+    let extra: Vec<(String, String)> = std::env::var("GDSKY_BENCH_WGSL")
+        .ok()
+        .map(|list| {
+            list.split(':')
+                .filter(|p| !p.is_empty())
+                .map(|p| (p.to_string(), std::fs::read_to_string(p).unwrap_or_else(|e| panic!("{p}: {e}"))))
+                .collect()
+        })
+        .unwrap_or_default();
+    for (name, wgsl) in &extra {
+        shaders.push((name.as_str(), SkyShader::new(&gpu, wgsl, SubPasses::default()).expect("compiles"), &material));
+    }
     let render = |shader: &SkyShader, material: &[u8]| {
         shader.render(&gpu, Projection::Panorama, width, height, &builtins, material).expect("renders").gpu_wait
     };
@@ -101,8 +116,10 @@ fn render_time(c: &mut Criterion) {
     // The machine is shared and noisy: besides criterion's groups (one after the other), time
     // the two alternately, so drift in the machine's load hits both alike, and print the ratio
     // of the medians.
+    // `GDSKY_BENCH_ROUNDS=N` times N rounds instead of 40 (a loaded machine needs more).
+    let rounds: usize = std::env::var("GDSKY_BENCH_ROUNDS").ok().and_then(|n| n.parse().ok()).unwrap_or(40).max(1);
     let mut times: Vec<Vec<Duration>> = vec![Vec::new(); shaders.len()];
-    for round in 0..41 {
+    for round in 0..=rounds {
         for (i, (_, shader, material)) in shaders.iter().enumerate() {
             let t = render(shader, material);
             if round > 0 {
@@ -117,13 +134,13 @@ fn render_time(c: &mut Criterion) {
     let medians: Vec<Duration> = times.iter_mut().map(median).collect();
     for ((name, _, _), m) in shaders.iter().zip(&medians) {
         eprintln!(
-            "interleaved, 40 rounds: {name:<24} median {m:>9.2?}  ratio to hand_written {:.3}  to gdsky_converted {:.3}",
+            "interleaved, {rounds} rounds: {name:<24} median {m:>9.2?}  ratio to hand_written {:.3}  to gdsky_converted {:.3}",
             m.as_secs_f64() / medians[1].as_secs_f64(),
             m.as_secs_f64() / medians[0].as_secs_f64(),
         );
     }
     eprintln!(
-        "interleaved, 40 rounds: baked_at_defaults is {:.3}x as fast as gdsky_converted (generic); overrides_at_defaults {:.3}x",
+        "interleaved, {rounds} rounds: baked_at_defaults is {:.3}x as fast as gdsky_converted (generic); overrides_at_defaults {:.3}x",
         medians[0].as_secs_f64() / medians[4].as_secs_f64(),
         medians[0].as_secs_f64() / medians[5].as_secs_f64(),
     );

@@ -30,6 +30,9 @@ pub(crate) struct FnBuilder {
     runtime_copies: std::collections::HashSet<usize>,
     /// Local variables holding the bits of run-time copies of constants, by literal.
     runtime_vars: HashMap<(u8, u32), Handle<LocalVariable>>,
+    /// Run-time values known never to be NaN, by handle index: the compare-and-select form of
+    /// a maxNum `max`/`min` with an operand that is not NaN (`calls.rs`, `max_num`).
+    not_nan: std::collections::HashSet<usize>,
 }
 
 impl FnBuilder {
@@ -42,6 +45,7 @@ impl FnBuilder {
             known: Vec::new(),
             runtime_copies: std::collections::HashSet::new(),
             runtime_vars: HashMap::new(),
+            not_nan: std::collections::HashSet::new(),
         }
     }
 
@@ -56,6 +60,19 @@ impl FnBuilder {
             return None;
         }
         self.known.get(h.index()).and_then(Option::as_ref)
+    }
+
+    /// Whether `h` is never NaN: a finite constant, a value marked by [`Self::mark_not_nan`], or
+    /// a splat of either.
+    pub fn is_not_nan(&self, h: Handle<Expression>) -> bool {
+        self.known(h).is_some_and(Value::is_finite)
+            || self.not_nan.contains(&h.index())
+            || matches!(self.function.expressions[h], Expression::Splat { value, .. } if self.is_not_nan(value))
+    }
+
+    /// Records that the run-time value `h` is never NaN.
+    pub fn mark_not_nan(&mut self, h: Handle<Expression>) {
+        self.not_nan.insert(h.index());
     }
 
     fn record(&mut self, h: Handle<Expression>, v: Option<Value>) {

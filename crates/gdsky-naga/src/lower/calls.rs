@@ -290,11 +290,15 @@ fn math(b: &mut FnBuilder, fun: Mf, args: &[H], sp: naga::Span) -> H {
 /// compares false and yields `c`), `min(x, c)` is `x < c ? x : c`. This is the cheaper NaN-proof
 /// form the clean-up of issue #11 asks for (`get_optical_depth_at_point`'s `max(0.0, …)` runs
 /// ~240 times per pixel); lavapipe's LLVM reads the pattern as one `maxps`.
+///
+/// The same holds for any operand known not to be NaN, and the result of that form is itself
+/// never NaN (it is `v` only where `v` compared true, else the operand that is not NaN): so
+/// `clamp(x, 0.5, u)` for a uniform `u` is two comparisons and two selects, the `min` taking
+/// the `max`'s result as its operand that is not NaN, instead of two bit tests around `min`.
 fn max_num(b: &mut FnBuilder, fun: Mf, x: H, y: H, n: Option<u8>, sp: naga::Span) -> H {
-    let not_nan = |b: &FnBuilder, h: H| b.known(h).is_some_and(|v| v.is_finite());
-    let constant = if not_nan(b, y) {
+    let constant = if b.is_not_nan(y) {
         Some((x, y))
-    } else if not_nan(b, x) {
+    } else if b.is_not_nan(x) {
         Some((y, x))
     } else {
         None
@@ -302,7 +306,9 @@ fn max_num(b: &mut FnBuilder, fun: Mf, x: H, y: H, n: Option<u8>, sp: naga::Span
     if let Some((v, c)) = constant {
         let op = if fun == Mf::Max { Bo::Greater } else { Bo::Less };
         let keep = b.expr(E::Binary { op, left: v, right: c }, sp);
-        return b.expr(E::Select { condition: keep, accept: v, reject: c }, sp);
+        let h = b.expr(E::Select { condition: keep, accept: v, reject: c }, sp);
+        b.mark_not_nan(h);
+        return h;
     }
     let m = math(b, fun, &[x, y], sp);
     let x_nan = float_class(b, x, n, Class::Nan, sp);
