@@ -352,9 +352,6 @@ fn bench(args: &BenchArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
     super::create_output_dir(&args.out_dir)?;
     super::write_file(&csv_path, csv.as_bytes()).map_err(environment)?;
     let png_path = args.out_dir.join("bench.png");
-    let title = format!("{shader_name} on {}: {}x{} {}", adapter.name, width, height, projection_name(&args.scene));
-    let defaults: Vec<i32> = knobs.iter().filter_map(|k| int_value(&base, &k.name)).collect();
-    plot(&png_path, &title, &rows, &knobs, &defaults, timer).map_err(environment)?;
 
     println!(
         "gdsky bench: {shader_name}, {} configurations, {width}x{height} {}",
@@ -379,7 +376,7 @@ fn bench(args: &BenchArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
     );
     println!("Pareto front (no other configuration both faster and more accurate):");
     print!("{}", front_table(&knobs, &rows));
-    println!("wrote    {} and {}", csv_path.display(), png_path.display());
+    let mut reduced = Vec::new();
     if args.skipping.skipping {
         let base_material = sweep::material(&loaded, &base).map_err(|e| usage(e.to_string()))?;
         let base_truth = converged.params(&base);
@@ -402,8 +399,27 @@ fn bench(args: &BenchArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
         let path = args.out_dir.join("skipping.csv");
         super::write_file(&path, super::bench_skip::csv(&rows).as_bytes()).map_err(environment)?;
         println!("wrote    {}", path.display());
+        reduced = reduced_points(&rows);
     }
+    let title = format!("{shader_name} on {}: {}x{} {}", adapter.name, width, height, projection_name(&args.scene));
+    let defaults: Vec<i32> = knobs.iter().filter_map(|k| int_value(&base, &k.name)).collect();
+    plot(&png_path, &title, &rows, &knobs, &defaults, &reduced, timer).map_err(environment)?;
+    println!("wrote    {} and {}", csv_path.display(), png_path.display());
     Ok(())
+}
+
+/// The bench shader's reduced sky resolutions with the default (bilinear) upsampling, as
+/// (median ms, mean relative error vs the converged truth, `half` or `quarter`): the points
+/// `--skipping` adds to the plot.
+fn reduced_points(rows: &[super::bench_skip::SkipRow]) -> Vec<(f64, f64, String)> {
+    rows.iter()
+        .filter(|r| r.kind == "resolution")
+        .filter_map(|r| {
+            let name = r.variant.strip_suffix("/bilinear")?;
+            let truth = r.vs_truth.as_ref().filter(|e| e.mean > 0.0)?;
+            Some((ms(r.median).max(1e-3), truth.mean, name.to_string()))
+        })
+        .collect()
 }
 
 fn projection_name(scene: &SceneArgs) -> &'static str {
@@ -491,8 +507,17 @@ fn front_table(knobs: &[Knob], rows: &[Row]) -> String {
 
 /// Draws mean relative error against median time, log-log: every configuration grey, the
 /// Pareto front red, connected and labelled with its knob values; the configuration with the
-/// uniforms' default values (`defaults`, when swept) ringed in black.
-fn plot(path: &Path, title: &str, rows: &[Row], knobs: &[Knob], defaults: &[i32], timer: &str) -> Result<(), String> {
+/// uniforms' default values (`defaults`, when swept) ringed in black; `reduced` (from
+/// `--skipping`: the defaults at a reduced sky resolution, labelled) blue diamonds.
+fn plot(
+    path: &Path,
+    title: &str,
+    rows: &[Row],
+    knobs: &[Knob],
+    defaults: &[i32],
+    reduced: &[(f64, f64, String)],
+    timer: &str,
+) -> Result<(), String> {
     sweep::register_fonts();
     let (w, h) = (960u32, 640u32);
     let mut rgb = vec![255u8; (w * h * 3) as usize];
@@ -501,6 +526,7 @@ fn plot(path: &Path, title: &str, rows: &[Row], knobs: &[Knob], defaults: &[i32]
         .filter(|r| r.errors.channels > 0 && r.errors.mean > 0.0)
         .map(|r| (ms(r.median).max(1e-3), r.errors.mean))
         .collect();
+    let all = || points.iter().copied().chain(reduced.iter().map(|p| (p.0, p.1)));
     let bounds = |values: Vec<f64>| {
         let lo = values.iter().copied().fold(f64::INFINITY, f64::min);
         let hi = values.iter().copied().fold(0.0, f64::max);
@@ -514,8 +540,8 @@ fn plot(path: &Path, title: &str, rows: &[Row], knobs: &[Knob], defaults: &[i32]
             (1e-3, 1.0)
         }
     };
-    let (x0, x1) = bounds(points.iter().map(|p| p.0).collect());
-    let (y0, y1) = bounds(points.iter().map(|p| p.1).collect());
+    let (x0, x1) = bounds(all().map(|p| p.0).collect());
+    let (y0, y1) = bounds(all().map(|p| p.1).collect());
     let mut front: Vec<(f64, f64, String)> = rows
         .iter()
         .filter(|r| r.pareto && r.errors.mean > 0.0)
@@ -575,6 +601,21 @@ fn plot(path: &Path, title: &str, rows: &[Row], knobs: &[Knob], defaults: &[i32]
                 .map_err(|e| err(&e))?
                 .label(format!("the shader's default ({label})"))
                 .legend(|(x, y)| Circle::new((x + 10, y), 6, BLACK.stroke_width(2)));
+        }
+        if !reduced.is_empty() {
+            let blue = RGBColor(30, 80, 200);
+            let diamond = move |(x, y): (i32, i32), r: i32| {
+                Polygon::new(vec![(x, y - r), (x + r, y), (x, y + r), (x - r, y)], blue.filled())
+            };
+            chart
+                .draw_series(reduced.iter().map(|(x, y, label)| {
+                    EmptyElement::at((*x, *y))
+                        + diamond((0, 0), 7)
+                        + Text::new(label.clone(), (8, 4), ("sans-serif", 14).into_font().color(&blue))
+                }))
+                .map_err(|e| err(&e))?
+                .label("the default at half / quarter sky resolution (bilinear)")
+                .legend(move |(x, y)| diamond((x + 10, y), 6));
         }
         // Labels alternate above-right and below-left of their points, away from a falling
         // front, so that neighbours close in time do not print over each other.

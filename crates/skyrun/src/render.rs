@@ -159,16 +159,22 @@ pub struct Rendered {
     pub gpu_time: Option<Duration>,
 }
 
+/// A sky pipeline's key: entry point, target format, depth test.
+type PipelineKey = (&'static str, wgpu::TextureFormat, Option<wgpu::CompareFunction>);
+
 /// A converted sky shader compiled for one device, ready to render any number of times.
 pub struct SkyShader {
     module: wgpu::ShaderModule,
     bindings: Vec<Binding>,
     group_layouts: Vec<wgpu::BindGroupLayout>,
     pipeline_layout: wgpu::PipelineLayout,
-    pipelines: Mutex<HashMap<(&'static str, wgpu::TextureFormat, Option<wgpu::CompareFunction>), wgpu::RenderPipeline>>,
+    pipelines: Mutex<HashMap<PipelineKey, wgpu::RenderPipeline>>,
     sub_passes: SubPasses,
     repeat_sampler: wgpu::Sampler,
     clamp_sampler: wgpu::Sampler,
+    /// The upsampling sampler of a panorama: linear, wrapping around horizontally (u repeat),
+    /// clamped vertically (v clamp to edge).
+    panorama_sampler: wgpu::Sampler,
     texture_defaults: Vec<((u32, u32), [f32; 4])>,
     /// Values of the module's overrides (`gdsky convert --override`), by `@id` as text; an
     /// override not listed keeps its default.
@@ -176,8 +182,9 @@ pub struct SkyShader {
     /// The depth `vs_main` gives the sky: its far plane (1 standard Z, 0 reversed Z), read from
     /// the module ([`gdsky_naga::wrapper::far_plane_depth`]); 1 when it cannot be read.
     far: f32,
-    /// The upsampling pipeline of a reduced sky resolution, per (with depth test), on first use.
-    upsample: Mutex<HashMap<bool, wgpu::RenderPipeline>>,
+    /// The upsampling pipeline of a reduced sky resolution, per (with depth test, filter), on
+    /// first use.
+    upsample: Mutex<HashMap<(bool, UpsampleFilter), wgpu::RenderPipeline>>,
 }
 
 /// The depth format of the occluder: 16-bit unorm holds 0, ½ and 1 exactly and, unlike
@@ -225,12 +232,12 @@ impl SkyShader {
                 bind_group_layouts: &group_layouts.iter().map(Some).collect::<Vec<_>>(),
                 immediate_size: 0,
             });
-            let sampler = |mode: wgpu::AddressMode| {
+            let sampler = |mode: wgpu::AddressMode, mode_v: wgpu::AddressMode| {
                 device.create_sampler(&wgpu::SamplerDescriptor {
                     label: Some("sky sampler"),
                     address_mode_u: mode,
-                    address_mode_v: mode,
-                    address_mode_w: mode,
+                    address_mode_v: mode_v,
+                    address_mode_w: mode_v,
                     mag_filter: wgpu::FilterMode::Linear,
                     min_filter: wgpu::FilterMode::Linear,
                     mipmap_filter: wgpu::MipmapFilterMode::Linear,
@@ -244,8 +251,9 @@ impl SkyShader {
                 pipeline_layout,
                 pipelines: Mutex::new(HashMap::new()),
                 sub_passes,
-                repeat_sampler: sampler(wgpu::AddressMode::Repeat),
-                clamp_sampler: sampler(wgpu::AddressMode::ClampToEdge),
+                repeat_sampler: sampler(wgpu::AddressMode::Repeat, wgpu::AddressMode::Repeat),
+                clamp_sampler: sampler(wgpu::AddressMode::ClampToEdge, wgpu::AddressMode::ClampToEdge),
+                panorama_sampler: sampler(wgpu::AddressMode::Repeat, wgpu::AddressMode::ClampToEdge),
                 texture_defaults: Vec::new(),
                 constants: Vec::new(),
                 far,
@@ -559,14 +567,17 @@ impl SkyShader {
         }
 
         let usage = if reduced { wgpu::TextureUsages::TEXTURE_BINDING } else { wgpu::TextureUsages::COPY_SRC };
-        let target = render_target(gpu, width, height, FULL_FORMAT, usage);
+        // A reduced image is read by the upsampling pass: half floats for bilinear (sampled
+        // with hardware filtering), f32 for Catmull–Rom (see `UpsampleFilter::reduced_format`).
+        let sky_format = if reduced { options.filter.reduced_format() } else { FULL_FORMAT };
+        let target = render_target(gpu, width, height, sky_format, usage);
         let view = target.create_view(&wgpu::TextureViewDescriptor::default());
         let groups =
             self.bind_groups(gpu, builtins, material_buffer.as_ref(), half_view.as_ref(), quarter_view.as_ref());
         let compare = self.depth_compare();
         let sky_target = Target {
             view: &view,
-            format: FULL_FORMAT,
+            format: sky_format,
             clear: occluded_color(),
             depth: depth_view.as_ref().map(|d| (d, compare)),
         };
@@ -782,38 +793,48 @@ impl SkyShader {
         let pipeline = {
             let mut cache = self.upsample.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
             cache
-                .entry(target.depth.is_some())
+                .entry((target.depth.is_some(), params.filter))
                 .or_insert_with(|| {
                     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
                         label: Some("sky upsample"),
                         source: wgpu::ShaderSource::Wgsl(UPSAMPLE_WGSL.into()),
                     });
-                    // Explicit, since a derived layout would ask for a filterable float texture
-                    // and Rgba32Float is not one without an optional feature.
+                    // Explicit: bilinear samples an Rgba16Float image through a filtering
+                    // sampler; Catmull–Rom loads from Rgba32Float, which is not filterable
+                    // without an optional feature (its entry point does not use the sampler).
+                    let bilinear = params.filter == UpsampleFilter::Bilinear;
+                    let entries = [
+                        wgpu::BindGroupLayoutEntry {
+                            binding: 0,
+                            visibility: wgpu::ShaderStages::FRAGMENT,
+                            ty: wgpu::BindingType::Texture {
+                                sample_type: wgpu::TextureSampleType::Float { filterable: bilinear },
+                                view_dimension: wgpu::TextureViewDimension::D2,
+                                multisampled: false,
+                            },
+                            count: None,
+                        },
+                        wgpu::BindGroupLayoutEntry {
+                            binding: 1,
+                            visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+                            ty: wgpu::BindingType::Buffer {
+                                ty: wgpu::BufferBindingType::Uniform,
+                                has_dynamic_offset: false,
+                                min_binding_size: None,
+                            },
+                            count: None,
+                        },
+                        wgpu::BindGroupLayoutEntry {
+                            binding: 2,
+                            visibility: wgpu::ShaderStages::FRAGMENT,
+                            ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                            count: None,
+                        },
+                    ];
+                    // Catmull–Rom reads no sampler: no binding 2.
                     let group = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                         label: Some("sky upsample"),
-                        entries: &[
-                            wgpu::BindGroupLayoutEntry {
-                                binding: 0,
-                                visibility: wgpu::ShaderStages::FRAGMENT,
-                                ty: wgpu::BindingType::Texture {
-                                    sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                                    view_dimension: wgpu::TextureViewDimension::D2,
-                                    multisampled: false,
-                                },
-                                count: None,
-                            },
-                            wgpu::BindGroupLayoutEntry {
-                                binding: 1,
-                                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-                                ty: wgpu::BindingType::Buffer {
-                                    ty: wgpu::BufferBindingType::Uniform,
-                                    has_dynamic_offset: false,
-                                    min_binding_size: None,
-                                },
-                                count: None,
-                            },
-                        ],
+                        entries: &entries[..if bilinear { 3 } else { 2 }],
                     });
                     let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                         label: Some("sky upsample"),
@@ -834,7 +855,7 @@ impl SkyShader {
                         multisample: wgpu::MultisampleState::default(),
                         fragment: Some(wgpu::FragmentState {
                             module: &module,
-                            entry_point: Some("fs_main"),
+                            entry_point: Some(if bilinear { "fs_bilinear" } else { "fs_catmull_rom" }),
                             compilation_options: Default::default(),
                             targets: &[Some(wgpu::ColorTargetState {
                                 format: target.format,
@@ -852,19 +873,21 @@ impl SkyShader {
         for v in [params.src[0], params.src[1], params.dst[0], params.dst[1]] {
             bytes.extend_from_slice(&(v as f32).to_le_bytes());
         }
-        let filter = u32::from(params.filter == UpsampleFilter::CatmullRom);
-        bytes.extend_from_slice(&filter.to_le_bytes());
         bytes.extend_from_slice(&u32::from(params.wrap_x).to_le_bytes());
         bytes.extend_from_slice(&self.far.to_le_bytes());
-        bytes.extend_from_slice(&0f32.to_le_bytes());
+        bytes.extend_from_slice(&[0; 8]);
         let buffer = uniform_buffer(gpu, "upsample params", &bytes);
+        let sampler = if params.wrap_x { &self.panorama_sampler } else { &self.clamp_sampler };
+        let entries = [
+            wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(src) },
+            wgpu::BindGroupEntry { binding: 1, resource: buffer.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::Sampler(sampler) },
+        ];
+        let bound = if params.filter == UpsampleFilter::Bilinear { 3 } else { 2 };
         let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("sky upsample"),
             layout: &pipeline.get_bind_group_layout(0),
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(src) },
-                wgpu::BindGroupEntry { binding: 1, resource: buffer.as_entire_binding() },
-            ],
+            entries: &entries[..bound],
         });
         let mut pass = begin_pass(encoder, target, timestamps);
         pass.set_pipeline(&pipeline);
