@@ -196,7 +196,9 @@ const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth16Unorm;
 struct Target<'a> {
     view: &'a wgpu::TextureView,
     format: wgpu::TextureFormat,
-    clear: wgpu::Color,
+    /// The clear value; `None`: every pixel is drawn, the old contents are not needed (the
+    /// upsampling pass without an occluder: its fullscreen triangle writes every pixel).
+    clear: Option<wgpu::Color>,
     depth: Option<(&'a wgpu::TextureView, wgpu::CompareFunction)>,
 }
 
@@ -557,7 +559,8 @@ impl SkyShader {
             let sub = SkyBuiltins { screen_size: [w as f32, h as f32], render_pass: pass, ..*builtins };
             let groups =
                 self.bind_groups(gpu, &sub, material_buffer.as_ref(), half_view.as_ref(), quarter_view.as_ref());
-            let target = Target { view: &view, format: SUB_PASS_FORMAT, clear: wgpu::Color::TRANSPARENT, depth: None };
+            let target =
+                Target { view: &view, format: SUB_PASS_FORMAT, clear: Some(wgpu::Color::TRANSPARENT), depth: None };
             self.draw(gpu, &mut encoder, &target, entry, &groups, queries.as_ref().map(|q| (q, passes)));
             passes += 1;
             match pass {
@@ -578,7 +581,7 @@ impl SkyShader {
         let sky_target = Target {
             view: &view,
             format: sky_format,
-            clear: occluded_color(),
+            clear: Some(occluded_color()),
             depth: depth_view.as_ref().map(|d| (d, compare)),
         };
         self.draw(gpu, &mut encoder, &sky_target, entry, &groups, queries.as_ref().map(|q| (q, passes)));
@@ -590,7 +593,9 @@ impl SkyShader {
             let up = Target {
                 view: &full_view,
                 format: FULL_FORMAT,
-                clear: occluded_color(),
+                // Without an occluder nothing is left uncovered: no clear of the full-size
+                // target (llvmpipe would memset 8 MB at 1024×512).
+                clear: options.occluder.is_some().then(occluded_color),
                 depth: full_depth.as_ref().map(|d| (d, compare)),
             };
             let params = UpsampleParams {
@@ -935,7 +940,15 @@ fn begin_pass<'e>(
             view: target.view,
             depth_slice: None,
             resolve_target: None,
-            ops: wgpu::Operations { load: wgpu::LoadOp::Clear(target.clear), store: wgpu::StoreOp::Store },
+            ops: wgpu::Operations {
+                load: match target.clear {
+                    Some(color) => wgpu::LoadOp::Clear(color),
+                    // SAFETY: only for a pass whose draw writes every pixel before any is read
+                    // (no blending, nothing reads the target within the pass).
+                    None => wgpu::LoadOp::DontCare(unsafe { wgpu::LoadOpDontCare::enabled() }),
+                },
+                store: wgpu::StoreOp::Store,
+            },
         })],
         depth_stencil_attachment: target.depth.map(|(view, _)| wgpu::RenderPassDepthStencilAttachment {
             view,
