@@ -176,3 +176,18 @@ fn bad_overrides_are_refused() {
         );
     }
 }
+
+#[test]
+fn uniform_loads_are_at_function_entry() {
+    // A uniform read in a loop and in a branch is loaded before the loop, at the top.
+    let w = wgsl(&front(
+        "shader_type sky;\nuniform float k = 2.0;\nuniform int n = 4;\n\
+         void sky() { float s = 0.0; for (int i = 0; i < n; i++) { if (EYEDIR.y > 0.0) { s += k; } } COLOR = vec3(s); }\n",
+    ));
+    let body = sky_body(&w);
+    let first_loop = body.find("loop {").expect("a loop");
+    for load in ["material.k", "material.n"] {
+        let at = body.find(load).unwrap_or_else(|| panic!("{load} in:\n{body}"));
+        assert!(at < first_loop, "{load} before the loop:\n{body}");
+    }
+}

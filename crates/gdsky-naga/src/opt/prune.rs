@@ -128,11 +128,7 @@ fn unname_unused_constants(module: &mut Module) {
             continue;
         }
         match &module.global_expressions[h] {
-            Expression::Constant(c) => {
-                if used.insert(*c) {
-                    work.push(module.constants[*c].init);
-                }
-            }
+            Expression::Constant(c) if used.insert(*c) => work.push(module.constants[*c].init),
             Expression::Compose { components, .. } => work.extend(components.iter().copied()),
             Expression::Splat { value, .. } => work.push(*value),
             Expression::Unary { expr, .. } | Expression::As { expr, .. } => work.push(*expr),
