@@ -74,6 +74,9 @@ pub struct AnimateArgs {
     skip: SkipArgs,
 }
 
+/// A view's last render: the inputs it was rendered from (the reuse key) and its pixels.
+type FaceRender = (Vec<u8>, Vec<[f32; 4]>);
+
 /// One frame's scene and what the shader sees of it.
 struct Frame {
     builtins: SkyBuiltins,
@@ -237,7 +240,7 @@ fn animate(args: &AnimateArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
     render_view(&frames[0], views[0])?;
 
     super::create_output_dir(&args.out_dir)?;
-    let mut faces: Vec<Option<(Vec<u8>, Vec<[f32; 4]>)>> = vec![None; views.len()];
+    let mut faces: Vec<Option<FaceRender>> = vec![None; views.len()];
     let mut next_face = 0usize;
     let (mut rendered, mut reused, mut faces_rendered) = (0u32, 0u32, 0usize);
     let mut render_time = Duration::ZERO;

@@ -183,7 +183,9 @@ pub fn lower_with_overrides(
                 if u.global { " global" } else { "" },
                 u.type_name
             )),
-            Some(_) if !lowered.uniforms.contains_key(name) => Some(format!("`{name}` has no place in the material block")),
+            Some(_) if !lowered.uniforms.contains_key(name) => {
+                Some(format!("`{name}` has no place in the material block"))
+            }
             Some(_) => None,
         };
         if let Some(why) = why {

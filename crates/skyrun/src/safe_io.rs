@@ -420,7 +420,7 @@ mod tests {
         assert!(err.contains("a FIFO (named pipe), not a regular file"), "{err}");
         let err = read_limited(Path::new("/dev/zero"), 1 << 20).unwrap_err().to_string();
         assert!(err.contains("a character device"), "{err}");
-        assert_eq!(read_limited(&dir.path(), 1 << 20).unwrap_err().kind(), ErrorKind::IsADirectory);
+        assert_eq!(read_limited(dir.path(), 1 << 20).unwrap_err().kind(), ErrorKind::IsADirectory);
         // A regular file whose metadata says 0 bytes but which has more: bounded by `take`.
         let status = fs::read("/proc/self/status");
         if status.as_ref().is_ok_and(|s| s.len() > 64) {
