@@ -1,4 +1,4 @@
-//! The `gdsky` command line. Commands and flag names follow the CLI contract in the README;
+//! The `gdsky` command line. Commands and flag names follow the CLI contract in docs/cli.md;
 //! scripts outside the project depend on them.
 
 mod cli;

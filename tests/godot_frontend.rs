@@ -85,8 +85,8 @@ const DISAGREEMENTS: &[Disagreement] = &[
                    which the shader editor shows. At run time Shader::set_code then compiles the raw text (the \
                    fallback that makes every other preprocessor error here read \"Unknown character #35\"), and \
                    the compiler's tokenizer ends an open block comment at the end of the input without an error \
-                   (ShaderLanguage::_get_token). gdsky follows the preprocessor (README: an unclosed `/*` is an \
-                   error).",
+                   (ShaderLanguage::_get_token). gdsky follows the preprocessor (docs/semantics.md: an \
+                   unclosed `/*` is an error).",
     },
     Disagreement {
         file: "invalid/wrong_shader_type_spatial.gdshader",

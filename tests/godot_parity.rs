@@ -21,7 +21,7 @@
 //! * Shaders that read TIME: the oracle's TIME is Godot's wall clock and cannot be set. (Two of
 //!   them, `sky_builtins_in_sky` and `globals_in_helper_function`, Godot 4.6 Compatibility does
 //!   not compile either: HALF_RES_COLOR, and POSITION/TIME/AT_*_PASS inside a helper function,
-//!   fail in its GLES3 back end; see the README's "Verified against Godot".)
+//!   fail in its GLES3 back end; see docs/godot.md.)
 //! * [`GODOT_REJECTS`]: shaders Godot 4.6's Compatibility renderer does not compile although
 //!   they are valid Godot shading language (its GLES3 back end, or its "high-end only" built-ins);
 //!   the test asserts Godot still rejects each of them and no other.

@@ -91,7 +91,7 @@ fn every_valid_test_shader_converts() {
 }
 
 /// The built-ins block is an interface hosts fill by hand: its layout is pinned here, and in
-/// the README's binding-interface section.
+/// docs/binding-interface.md.
 #[test]
 fn builtins_block_layout_is_fixed() {
     let _ = std::env::set_current_dir(root());

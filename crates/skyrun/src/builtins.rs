@@ -1,15 +1,14 @@
 //! The `SkyBuiltins` uniform (bind group 0, binding 0) as the host fills it.
 //!
-//! The layout is fixed by the converted shader's wrapper (see the workspace README, "Binding
-//! interface of converted shaders") and follows WGSL's uniform address-space rules: a
-//! `mat3x3<f32>` is three columns of 16 bytes, a `vec3<f32>` takes 12 bytes with 16-byte
-//! alignment so a scalar can follow it in the same 16 bytes, and the light array starts at the
-//! next multiple of 16. [`SkyBuiltins::to_bytes`] writes every field at its offset from the
-//! [`offsets`] constants (little-endian, as every wgpu backend expects) and zero-fills the
-//! padding; the unit tests hold those constants against the layout naga computes for the
-//! wrapper's own `SkyBuiltins` struct.
+//! The layout is fixed by the converted shader's wrapper (see docs/binding-interface.md) and
+//! follows WGSL's uniform address-space rules: a `mat3x3<f32>` is three columns of 16 bytes, a
+//! `vec3<f32>` takes 12 bytes with 16-byte alignment so a scalar can follow it in the same 16
+//! bytes, and the light array starts at the next multiple of 16. [`SkyBuiltins::to_bytes`] writes
+//! every field at its offset from the [`offsets`] constants (little-endian, as every wgpu backend
+//! expects) and zero-fills the padding; the unit tests hold those constants against the layout
+//! naga computes for the wrapper's own `SkyBuiltins` struct.
 
-/// Byte offsets of the members of `SkyBuiltins` and `SkyLight`, from the README.
+/// Byte offsets of the members of `SkyBuiltins` and `SkyLight`, from docs/binding-interface.md.
 pub mod offsets {
     /// `camera_basis: mat3x3<f32>` (three columns, stride 16).
     pub const CAMERA_BASIS: usize = 0;
@@ -81,7 +80,7 @@ pub struct SkyLight {
 /// EYEDIR (screen size, tan(fov/2), cube face).
 ///
 /// The fields are the WGSL members with their WGSL types; [`to_bytes`](Self::to_bytes) lays
-/// them out at the README's offsets into the 288 bytes the shader reads.
+/// them out at docs/binding-interface.md's offsets into the 288 bytes the shader reads.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SkyBuiltins {
     /// Camera basis as three columns (right, up, back), used by `fs_camera`.

@@ -16,8 +16,8 @@
 //!   screen size, tan(fov/2), pass, luminance multiplier, cube face and four lights.
 //!   [`SkyBuiltins::from_scene`] fills it from a [`skyref::Scene`] with the same f64→f32
 //!   roundings skyref applies, so both sides start from identical inputs; [`SkyBuiltins::to_bytes`]
-//!   lays it out at the README's offsets, which a unit test holds against the layout naga
-//!   computes for the wrapper's own struct.
+//!   lays it out at the offsets in docs/binding-interface.md, which a unit test holds against
+//!   the layout naga computes for the wrapper's own struct.
 //! * [`material_bytes`] writes uniform values into the material block (group 1) at the offsets
 //!   the lowering reports ([`gdsky_naga::Lowered::uniforms`]) after checking each value's type;
 //!   [`freeman_material`] does it for all 22 Freeman uniforms from a [`skyref::FreemanParams`].

@@ -9,7 +9,7 @@
 //!
 //! ## Thresholds, and why
 //!
-//! Measured on lavapipe (README, "Measured numbers"): GPU against skyref f32 has p99.9 ≤ 3.9e-4
+//! Measured on lavapipe (docs/measured.md, "Pixels"): GPU against skyref f32 has p99.9 ≤ 3.9e-4
 //! in every scene, below skyref's own f32-versus-f64 p99.9 in the same scene (up to 5e-3 with
 //! the sun 0.5° up). So:
 //!
