@@ -21,8 +21,13 @@ say() { printf 'install-oracle: %s\n' "$*"; }
 mkdir -p "$oracle"
 
 # 1. Chromium (Debian's build; WebGL2 runs on SwiftShader through ANGLE when there is no GPU).
-if [ -x /usr/bin/chromium ]; then
-    say "chromium: present ($(/usr/bin/chromium --version 2>/dev/null | head -n1))"
+#    A Chromium named by SKYORACLE_CHROMIUM (e.g. Ubuntu's snap) replaces Debian's, as in skyoracle.
+chromium="${SKYORACLE_CHROMIUM:-/usr/bin/chromium}"
+if [ -x "$chromium" ]; then
+    say "chromium: present at $chromium ($("$chromium" --version 2>/dev/null | head -n1))"
+elif [ -n "${SKYORACLE_CHROMIUM:-}" ]; then
+    say "chromium: SKYORACLE_CHROMIUM=$SKYORACLE_CHROMIUM is not an executable file"
+    exit 1
 elif [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
     say "chromium: installing with apt-get"
     export DEBIAN_FRONTEND=noninteractive
