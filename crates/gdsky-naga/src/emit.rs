@@ -121,7 +121,7 @@ fn with_shallow_expressions<'m>(
                     let printed_by_name = function.named_expressions.contains_key(o) || fun_info[*o].ref_count > 1;
                     if printed_by_name { 1 } else { depth[o.index()] }
                 };
-                let d = 1 + operands(expression).iter().map(inline).max().unwrap_or(0);
+                let d = 1 + crate::opt::operands(expression).unwrap_or_default().iter().map(inline).max().unwrap_or(0);
                 let value = !matches!(
                     fun_info[h].ty.inner_with(&module.types),
                     naga::TypeInner::Pointer { .. } | naga::TypeInner::ValuePointer { .. }
@@ -153,58 +153,20 @@ fn with_shallow_expressions<'m>(
 }
 
 /// Whether naga covers `expression` with an `Emit` statement (only such expressions can be
-/// named into a `let`; literals, constants, variables, arguments and call results print as
-/// themselves).
+/// named into a `let`): not the pre-emitted kinds (literals, constants, variables, arguments),
+/// nor the results a statement defines (calls, atomics and the like), which print as themselves.
 fn is_emitted(expression: &naga::Expression) -> bool {
     use naga::Expression as E;
-    !matches!(
-        expression,
-        E::Literal(_)
-            | E::Constant(_)
-            | E::Override(_)
-            | E::ZeroValue(_)
-            | E::FunctionArgument(_)
-            | E::GlobalVariable(_)
-            | E::LocalVariable(_)
-            | E::CallResult(_)
-            | E::AtomicResult { .. }
-            | E::WorkGroupUniformLoadResult { .. }
-            | E::RayQueryProceedResult
-            | E::SubgroupBallotResult
-            | E::SubgroupOperationResult { .. }
-    )
-}
-
-/// The expressions `expression` reads.
-fn operands(expression: &naga::Expression) -> Vec<naga::Handle<naga::Expression>> {
-    use naga::Expression as E;
-    match *expression {
-        E::Access { base, index } => vec![base, index],
-        E::AccessIndex { base, .. } => vec![base],
-        E::Splat { value, .. } => vec![value],
-        E::Swizzle { vector, .. } => vec![vector],
-        E::Compose { ref components, .. } => components.clone(),
-        E::Load { pointer } => vec![pointer],
-        E::ImageSample { image, sampler, coordinate, array_index, offset, depth_ref, .. } => {
-            [Some(image), Some(sampler), Some(coordinate), array_index, offset, depth_ref]
-                .into_iter()
-                .flatten()
-                .collect()
-        }
-        E::ImageLoad { image, coordinate, array_index, sample, level } => {
-            [Some(image), Some(coordinate), array_index, sample, level].into_iter().flatten().collect()
-        }
-        E::ImageQuery { image, .. } => vec![image],
-        E::Unary { expr, .. } => vec![expr],
-        E::Binary { left, right, .. } => vec![left, right],
-        E::Select { condition, accept, reject } => vec![condition, accept, reject],
-        E::Derivative { expr, .. } => vec![expr],
-        E::Relational { argument, .. } => vec![argument],
-        E::Math { arg, arg1, arg2, arg3, .. } => [Some(arg), arg1, arg2, arg3].into_iter().flatten().collect(),
-        E::As { expr, .. } => vec![expr],
-        E::ArrayLength(e) => vec![e],
-        _ => Vec::new(),
-    }
+    !expression.needs_pre_emit()
+        && !matches!(
+            expression,
+            E::CallResult(_)
+                | E::AtomicResult { .. }
+                | E::WorkGroupUniformLoadResult { .. }
+                | E::RayQueryProceedResult
+                | E::SubgroupBallotResult
+                | E::SubgroupOperationResult { .. }
+        )
 }
 
 /// The first statement of `module` that opens braces deeper than WGSL allows

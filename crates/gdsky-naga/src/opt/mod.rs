@@ -50,6 +50,8 @@ pub(crate) mod overrides;
 mod prune;
 mod uses;
 
+pub(crate) use uses::operands;
+
 /// Runs every pass on a lowered module.
 pub fn optimize(module: &mut naga::Module) {
     prune::prune(module);

@@ -7,7 +7,7 @@ use std::collections::HashSet;
 type H = Handle<E>;
 
 /// The operands of `e`; `None` for kinds gdsky never writes (the caller then assumes the worst).
-fn operands(e: &E) -> Option<Vec<H>> {
+pub(crate) fn operands(e: &E) -> Option<Vec<H>> {
     Some(match e {
         E::Literal(_)
         | E::Constant(_)
