@@ -12,6 +12,16 @@
 //! layout is the WGSL layout; include it with
 //! `include!(concat!(env!("OUT_DIR"), "/freeman_sky.rs"));` in a crate that depends on
 //! `bytemuck` with its `derive` feature.
+//!
+//! [`compile_with`] takes [`Options`]: uniforms baked into the shader as constants (`--set` of
+//! `gdsky convert`) and uniforms emitted as pipeline-overridable constants (`--override`). Both
+//! leave the material struct and the reflection's `uniforms`, and are listed in its `baked` and
+//! `overrides`.
+//!
+//! ```no_run
+//! let options = gdsky::build::Options::new().set("view_samples", "16").override_uniform("sun_intensity");
+//! gdsky::build::compile_with("shaders/freeman_sky.gdshader", &options).expect("sky shader compiles");
+//! ```
 
 use gdshader::check::consteval::ConstValue;
 use gdshader::check::types::{Scalar, Type};
@@ -58,14 +68,58 @@ impl std::fmt::Display for BuildError {
 
 impl std::error::Error for BuildError {}
 
+/// How [`compile_with`] specializes the shader; the default changes nothing.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Options {
+    /// Uniforms baked into the shader as constants, each with the text of its value as
+    /// `gdsky convert --set NAME=VALUE` takes it (`1.5`, `24`, `true`, `0.1,0.2,0.3`); when a
+    /// name comes twice the last value counts.
+    pub set: Vec<(String, String)>,
+    /// Scalar material uniforms emitted as pipeline-overridable constants (WGSL `override`
+    /// `@id(k)` and SPIR-V specialization constant `SpecId k` for the k-th name), as
+    /// `gdsky convert --override NAME` does.
+    pub overrides: Vec<String>,
+}
+
+impl Options {
+    /// No bakes, no overrides.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Bakes uniform `name` at `value` (the text `--set NAME=VALUE` takes).
+    pub fn set(mut self, name: impl Into<String>, value: impl Into<String>) -> Self {
+        self.set.push((name.into(), value.into()));
+        self
+    }
+
+    /// Emits uniform `name` as the next pipeline-overridable constant.
+    pub fn override_uniform(mut self, name: impl Into<String>) -> Self {
+        self.overrides.push(name.into());
+        self
+    }
+}
+
 /// Compiles a sky shader into `OUT_DIR` (see the module documentation).
 pub fn compile(shader: impl AsRef<Path>) -> Result<Compiled, BuildError> {
+    compile_with(shader, &Options::default())
+}
+
+/// Like [`compile`], with uniforms baked or overridden as `options` says.
+pub fn compile_with(shader: impl AsRef<Path>, options: &Options) -> Result<Compiled, BuildError> {
     let out_dir = std::env::var_os("OUT_DIR").map(PathBuf::from).ok_or(BuildError::NoOutDir)?;
-    compile_into(shader.as_ref(), &out_dir)
+    compile_into_with(shader.as_ref(), &out_dir, options)
 }
 
 /// Like [`compile`], into a given directory.
 pub fn compile_into(shader: &Path, out_dir: &Path) -> Result<Compiled, BuildError> {
+    compile_into_with(shader, out_dir, &Options::default())
+}
+
+/// Like [`compile_with`], into a given directory. A name that is no uniform, a value that does
+/// not fit its uniform, or an override of something other than a scalar material uniform comes
+/// back as [`BuildError::Shader`] with the E603 diagnostics.
+pub fn compile_into_with(shader: &Path, out_dir: &Path, options: &Options) -> Result<Compiled, BuildError> {
     println!("cargo:rerun-if-changed={}", shader.display());
     let front = crate::check_file(shader).map_err(|e| BuildError::Io(shader.to_path_buf(), e))?;
     for include in &front.preprocessed.includes {
@@ -79,9 +133,10 @@ pub fn compile_into(shader: &Path, out_dir: &Path) -> Result<Compiled, BuildErro
     let Some(checked) = front.shader.as_ref() else {
         return Err(fail(render(&front.diagnostics)));
     };
-    let lowered = gdsky_naga::lower(&front).map_err(|d| fail(render(&d)))?;
+    let baked: HashMap<String, String> = options.set.iter().cloned().collect();
+    let lowered = gdsky_naga::lower_with_overrides(&front, &baked, &options.overrides).map_err(|d| fail(render(&d)))?;
     let stem = shader.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "shader".into());
-    write_lowered(&front, checked, &lowered, &stem, out_dir)
+    write_lowered_with(&front, checked, &lowered, &baked, &stem, out_dir)
 }
 
 /// The second half of [`compile_into`]: emits a lowered shader as `<stem>.{wgsl,spv,json,rs}` in
@@ -95,6 +150,19 @@ pub fn write_lowered(
     stem: &str,
     out_dir: &Path,
 ) -> Result<Compiled, BuildError> {
+    write_lowered_with(front, checked, lowered, &HashMap::new(), stem, out_dir)
+}
+
+/// Like [`write_lowered`], for a shader lowered with the uniforms of `baked` (name to the text of
+/// its value) baked in: the reflection lists them in `baked`.
+pub fn write_lowered_with(
+    front: &gdshader::FrontendOutput,
+    checked: &gdshader::CheckedShader,
+    lowered: &gdsky_naga::Lowered,
+    baked: &HashMap<String, String>,
+    stem: &str,
+    out_dir: &Path,
+) -> Result<Compiled, BuildError> {
     let fail = |e: gdsky_naga::EmitError| {
         let text = gdshader::diag::render_human(&front.db, &[e.diagnostic(front)], false);
         eprint!("{text}");
@@ -102,7 +170,7 @@ pub fn write_lowered(
     };
     let wgsl = gdsky_naga::to_wgsl(lowered).map_err(fail)?;
     let words = gdsky_naga::to_spirv(lowered).map_err(fail)?;
-    let reflection = gdsky_naga::reflect::reflection(stem, checked, lowered, &HashMap::new());
+    let reflection = gdsky_naga::reflect::reflection(stem, checked, lowered, baked);
     let rust = material_struct(stem, checked, lowered);
     let compiled = Compiled {
         wgsl: out_dir.join(format!("{stem}.wgsl")),
