@@ -48,6 +48,21 @@ fn options_bake_into_the_reflection_and_the_material_struct() {
     let wgsl = std::fs::read_to_string(&baked.wgsl).expect("wgsl written");
     assert!(wgsl.contains("const view_samples: i32 = 16i;"), "{wgsl}");
 
+    // An override leaves the struct and the uniforms, is listed with its id, and the SPIR-V
+    // carries it as a specialization constant (OpSpecConstant, opcode 50).
+    let over_dir = temp_dir("override");
+    let over =
+        compile_into_with(shader, &over_dir, &Options::new().override_uniform("sun_intensity")).expect("compiles");
+    let over_json = json(&over.reflection);
+    assert!(!uniform_names(&over_json).contains(&"sun_intensity".to_string()));
+    assert_eq!(over_json["overrides"][0]["name"], "sun_intensity");
+    assert_eq!(over_json["overrides"][0]["id"], 0);
+    assert!(!std::fs::read_to_string(&over.rust).expect("rust").contains("pub sun_intensity"));
+    let spv = std::fs::read(&over.spirv).expect("spv written");
+    let words: Vec<u32> = spv.chunks_exact(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
+    assert!(words.contains(&((4 << 16) | 50)), "an OpSpecConstant");
+    let _ = std::fs::remove_dir_all(&over_dir);
+
     for (tag, options) in [
         ("name", Options::new().set("no_such_uniform", "1")),
         ("value", Options::new().set("view_samples", "1.5")),

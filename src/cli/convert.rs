@@ -28,8 +28,8 @@ pub struct ConvertArgs {
     set: Vec<String>,
     /// Emit a scalar uniform as a WGSL `override` (`@id(k)` for the k-th `--override`, its
     /// default the uniform's) instead of a member of the material block: one module serves many
-    /// values, given at pipeline creation. The reflection's `overrides` lists them. naga cannot
-    /// write overrides to SPIR-V, so with `--override` no `.spv` is written.
+    /// values, given at pipeline creation. The reflection's `overrides` lists them. In the `.spv`
+    /// each is a specialization constant (`OpSpecConstant`, `SpecId` k).
     #[arg(long = "override", value_name = "NAME")]
     overrides: Vec<String>,
     /// Reversed Z: the vertex entry puts the sky at depth 0 (the far plane when near is 1; depth
@@ -102,12 +102,9 @@ pub fn run(args: &ConvertArgs) -> ExitCode {
     if args.reversed_z {
         gdsky_naga::wrapper::set_far_plane_depth(&mut lowered.module, gdsky_naga::wrapper::FAR_PLANE_REVERSED);
     }
-    // Both texts come back re-read and validated by naga's own front ends, or not at all.
-    // naga 30's SPIR-V writer has no specialization constants: a module with overrides is WGSL
-    // only.
-    let spirv_too = args.overrides.is_empty();
-    let emitted = gdsky_naga::to_wgsl(&lowered)
-        .and_then(|w| Ok((w, if spirv_too { gdsky_naga::to_spirv(&lowered)? } else { Vec::new() })));
+    // Both texts come back re-read and validated by naga's own front ends, or not at all;
+    // overrides are specialization constants in the SPIR-V.
+    let emitted = gdsky_naga::to_wgsl(&lowered).and_then(|w| Ok((w, gdsky_naga::to_spirv(&lowered)?)));
     let (wgsl, spirv) = match emitted {
         Ok((w, words)) => (w, words.iter().flat_map(|w| w.to_le_bytes()).collect::<Vec<u8>>()),
         Err(err) => {
@@ -126,13 +123,7 @@ pub fn run(args: &ConvertArgs) -> ExitCode {
     if let Err(code) = super::create_output_dir(&args.out_dir) {
         return code;
     }
-    if !spirv_too {
-        println!("{} not written: naga cannot write overrides (--override) as SPIR-V", names[1]);
-    }
     for (name, bytes) in names.iter().zip([wgsl.as_bytes(), spirv.as_slice(), json.as_bytes()]) {
-        if name == &names[1] && !spirv_too {
-            continue;
-        }
         let path = args.out_dir.join(name);
         if let Err(message) = super::write_file(&path, bytes) {
             return super::environment(message);

@@ -12,6 +12,10 @@
 //! `spirv-val` accepts) into IR its validator rejects; [`complete_spirv_reread`] fills exactly
 //! those gaps, each named with its cause, so the validator judges the module rather than the
 //! front end. A gap found later shows up as E604 on a valid shader and belongs there.
+//!
+//! naga 30's SPIR-V writer refuses overrides; [`to_spirv`] writes them as specialization
+//! constants itself (see `spec_constants`), and the re-read checks each comes back as an
+//! override with its id and default.
 
 use crate::{BACKEND, Lowered, REREAD, validator};
 use gdshader::parse::ast;
@@ -226,11 +230,21 @@ pub fn reread_wgsl(module: &naga::Module, text: &str) -> Result<(), EmitError> {
 /// Writes the module as SPIR-V 1.3 for Vulkan, every entry point in one module, then re-reads it
 /// with naga's SPIR-V front end and validates the result. The vertex position is written in
 /// Vulkan's clip space as wgpu expects (naga's default adjustment).
+///
+/// Each override of the module (`--override`) becomes a specialization constant: an
+/// `OpSpecConstant` decorated `SpecId k` (its `@id`) whose default is the override's. naga 30's
+/// writer has no specialization constants, so [`spec_constants`] writes a copy of the module in
+/// which each override is an ordinary constant with a sentinel value found nowhere else, and
+/// turns that one constant of the binary into the specialization constant.
 pub fn to_spirv(lowered: &Lowered) -> Result<Vec<u32>, EmitError> {
     let fail = |message: String, reread| EmitError { format: "SPIR-V", message, reread, span: None, function: None };
     let options = naga::back::spv::Options { lang_version: (1, 3), fake_missing_bindings: true, ..Default::default() };
-    let words = naga::back::spv::write_vec(&lowered.module, &lowered.info, &options, None)
-        .map_err(|e| fail(format!("naga's SPIR-V writer failed: {e}"), false))?;
+    let words = if lowered.module.overrides.is_empty() {
+        naga::back::spv::write_vec(&lowered.module, &lowered.info, &options, None)
+            .map_err(|e| fail(format!("naga's SPIR-V writer failed: {e}"), false))?
+    } else {
+        spec_constants(&lowered.module, &options).map_err(|m| fail(m, false))?
+    };
     let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
     let mut reread = naga::front::spv::parse_u8_slice(&bytes, &naga::front::spv::Options::default())
         .map_err(|e| fail(format!("the emitted SPIR-V does not re-read with naga's SPIR-V front end: {e}"), true))?;
@@ -238,6 +252,189 @@ pub fn to_spirv(lowered: &Lowered) -> Result<Vec<u32>, EmitError> {
     validator()
         .validate(&reread)
         .map_err(|e| fail(format!("the re-read SPIR-V does not validate: {}", error_chain(e.as_inner())), true))?;
+    // Every override reads back as the specialization constant of its id, with its default.
+    for (_, o) in lowered.module.overrides.iter() {
+        let default = o.init.map(|i| &lowered.module.global_expressions[i]);
+        let found = reread.overrides.iter().any(|(_, r)| {
+            r.id == o.id && r.init.map(|i| &reread.global_expressions[i]) == default && default.is_some()
+        });
+        if !found {
+            return Err(fail(
+                format!(
+                    "the override `{}` does not read back as a specialization constant with its id and default",
+                    o.name.as_deref().unwrap_or("?")
+                ),
+                true,
+            ));
+        }
+    }
+    Ok(words)
+}
+
+/// SPIR-V opcodes [`spec_constants`] reads or writes.
+mod op {
+    pub const TYPE_INT: u32 = 21;
+    pub const TYPE_FLOAT: u32 = 22;
+    pub const CONSTANT: u32 = 43;
+    pub const CONSTANT_COMPOSITE: u32 = 44;
+    pub const SPEC_CONSTANT: u32 = 50;
+    pub const FUNCTION: u32 = 54;
+    pub const DECORATE: u32 = 71;
+    /// `OpDecorate` … `OpGroupMemberDecorate`, `OpDecorateId`, `OpDecorateString`,
+    /// `OpMemberDecorateString`: the annotations section of the logical layout.
+    pub fn is_annotation(opcode: u32) -> bool {
+        matches!(opcode, 71..=75 | 332 | 5632 | 5633)
+    }
+    /// Type declarations (`OpTypeVoid` … `OpTypeForwardPointer`), which follow the annotations.
+    pub fn is_type(opcode: u32) -> bool {
+        matches!(opcode, 19..=39)
+    }
+    /// The `SpecId` decoration.
+    pub const SPEC_ID: u32 = 1;
+}
+
+/// Writes a module with overrides as SPIR-V with a specialization constant per override (see
+/// [`to_spirv`]). Each override must be a 32-bit scalar (gdsky makes `f32`, `i32` and `u32` ones)
+/// used only as a value in functions, which is all `--override` produces. The refusals (E602)
+/// are cases where the constant cannot be found again in the binary: the writer folded it into
+/// a composite constant, or the sentinel is not unique.
+fn spec_constants(module: &naga::Module, options: &naga::back::spv::Options) -> Result<Vec<u32>, String> {
+    use naga::{Expression as E, Literal as L};
+    let refuse =
+        |name: &str, why: String| format!("cannot write the override `{name}` as a specialization constant: {why}");
+    // Every 32-bit literal of the module, as (is_float, signed, bits).
+    let mut used = std::collections::HashSet::new();
+    let mut note = |e: &E| match *e {
+        E::Literal(L::F32(f)) => {
+            used.insert((true, false, f.to_bits()));
+        }
+        E::Literal(L::I32(i)) => {
+            used.insert((false, true, i as u32));
+        }
+        E::Literal(L::U32(u)) => {
+            used.insert((false, false, u));
+        }
+        _ => {}
+    };
+    module.global_expressions.iter().for_each(|(_, e)| note(e));
+    for f in module.functions.iter().map(|(_, f)| f).chain(module.entry_points.iter().map(|e| &e.function)) {
+        f.expressions.iter().for_each(|(_, e)| note(e));
+    }
+    let mut copy = module.clone();
+    // (name, SpecId, (is_float, signed), sentinel bits, default bits, constant handle)
+    let mut specs = Vec::new();
+    let mut constant_of = std::collections::HashMap::new();
+    for (h, o) in module.overrides.iter() {
+        let name = o.name.clone().unwrap_or_else(|| format!("override{}", h.index()));
+        let Some(id) = o.id else {
+            return Err(refuse(&name, "it has no id".into()));
+        };
+        let default = o.init.map(|i| &module.global_expressions[i]);
+        let (kind, default_bits) = match default {
+            Some(E::Literal(L::F32(f))) => ((true, false), f.to_bits()),
+            Some(E::Literal(L::I32(i))) => ((false, true), *i as u32),
+            Some(E::Literal(L::U32(u))) => ((false, false), *u),
+            _ => return Err(refuse(&name, "its default is not a 32-bit scalar literal".into())),
+        };
+        // Sentinels: values no shader or polyfill writes, tried until one is unused.
+        let sentinel = (0u32..64)
+            .map(|k| if kind.0 { (0x1E5E_C000 + k * 0x1_0003).to_owned() } else { 0x5EC1_D00D ^ (k * 0x0101_0101) })
+            .find(|bits| !used.contains(&(kind.0, kind.1, *bits)))
+            .ok_or_else(|| refuse(&name, "no sentinel value is free".into()))?;
+        used.insert((kind.0, kind.1, sentinel));
+        let literal = match kind {
+            (true, _) => L::F32(f32::from_bits(sentinel)),
+            (false, true) => L::I32(sentinel as i32),
+            (false, false) => L::U32(sentinel),
+        };
+        let init = copy.global_expressions.append(E::Literal(literal), naga::Span::UNDEFINED);
+        let c =
+            copy.constants.append(naga::Constant { name: Some(name.clone()), ty: o.ty, init }, naga::Span::UNDEFINED);
+        constant_of.insert(h, c);
+        specs.push((name, u32::from(id), kind, sentinel, default_bits));
+    }
+    if copy.global_expressions.iter().any(|(_, e)| matches!(e, E::Override(_))) {
+        return Err(refuse(&specs[0].0, "an override is used in a module-scope expression".into()));
+    }
+    copy.overrides = naga::Arena::new();
+    let functions =
+        copy.functions.iter_mut().map(|(_, f)| f).chain(copy.entry_points.iter_mut().map(|e| &mut e.function));
+    for f in functions {
+        for (_, e) in f.expressions.iter_mut() {
+            if let E::Override(o) = *e {
+                *e = E::Constant(constant_of[&o]);
+            }
+        }
+    }
+    let info = validator().validate(&copy).map_err(|e| {
+        format!("the module with overrides as constants does not validate: {}", error_chain(e.as_inner()))
+    })?;
+    let mut words = naga::back::spv::write_vec(&copy, &info, options, None)
+        .map_err(|e| format!("naga's SPIR-V writer failed: {e}"))?;
+    // The instructions after the five header words: (start, opcode, length).
+    let instructions = |words: &[u32]| {
+        let mut at = 5;
+        let mut list = Vec::new();
+        while at < words.len() {
+            let (len, opcode) = ((words[at] >> 16) as usize, words[at] & 0xffff);
+            if len == 0 || at + len > words.len() {
+                break;
+            }
+            list.push((at, opcode, len));
+            at += len;
+        }
+        list
+    };
+    let list = instructions(&words);
+    let scalar_type = |words: &[u32], kind: (bool, bool)| -> Vec<u32> {
+        list.iter()
+            .filter(|&&(at, opcode, len)| match kind {
+                (true, _) => opcode == op::TYPE_FLOAT && len >= 3 && words[at + 2] == 32,
+                (false, signed) => {
+                    opcode == op::TYPE_INT && len == 4 && words[at + 2] == 32 && words[at + 3] == u32::from(signed)
+                }
+            })
+            .map(|&(at, _, _)| words[at + 1])
+            .collect()
+    };
+    let mut decorations = Vec::new();
+    for (name, id, kind, sentinel, default_bits) in &specs {
+        let types = scalar_type(&words, *kind);
+        let found: Vec<usize> = list
+            .iter()
+            .filter(|&&(at, opcode, len)| {
+                opcode == op::CONSTANT && len == 4 && types.contains(&words[at + 1]) && words[at + 3] == *sentinel
+            })
+            .map(|&(at, _, _)| at)
+            .collect();
+        let [at] = found[..] else {
+            return Err(refuse(
+                name,
+                format!("naga's writer left {} constants of its sentinel value (one expected)", found.len()),
+            ));
+        };
+        let result = words[at + 2];
+        let in_composite = list
+            .iter()
+            .any(|&(c, opcode, len)| opcode == op::CONSTANT_COMPOSITE && words[c + 3..c + len].contains(&result));
+        if in_composite {
+            return Err(refuse(name, "naga's writer folded it into a composite constant".into()));
+        }
+        words[at] = (4 << 16) | op::SPEC_CONSTANT;
+        words[at + 3] = *default_bits;
+        decorations.extend([(4 << 16) | op::DECORATE, result, op::SPEC_ID, *id]);
+    }
+    // Into the annotations: after the last one before the first function, else before the first
+    // type declaration.
+    let list = instructions(&words);
+    let functions_start = list.iter().find(|i| i.1 == op::FUNCTION).map_or(words.len(), |i| i.0);
+    let at = list
+        .iter()
+        .rfind(|i| i.0 < functions_start && op::is_annotation(i.1))
+        .map(|i| i.0 + i.2)
+        .or_else(|| list.iter().find(|i| op::is_type(i.1)).map(|i| i.0))
+        .ok_or_else(|| "the written SPIR-V has no type declarations".to_string())?;
+    words.splice(at..at, decorations);
     Ok(words)
 }
 

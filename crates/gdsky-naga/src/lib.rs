@@ -159,7 +159,8 @@ fn lower_here(front: &FrontendOutput, baked: &HashMap<String, String>) -> Result
 /// for the k-th name, defaulting to the uniform's default; a `bool` as a `u32` 0 or 1) instead of
 /// a member of the material block: one module serves many values, given when the pipeline is
 /// created (wgpu's `PipelineCompilationOptions::constants`, keyed by the id as text). Only scalar
-/// material uniforms can be overrides; naga 30 writes them to WGSL but not to SPIR-V.
+/// material uniforms can be overrides. [`to_spirv`] writes each as a specialization constant
+/// (`OpSpecConstant` decorated `SpecId k`, the same k).
 pub fn lower_with_overrides(
     front: &FrontendOutput,
     baked: &HashMap<String, String>,

@@ -154,8 +154,38 @@ fn overrides_are_wgsl_overrides_and_listed_in_the_reflection() {
     let uniforms: Vec<&str> =
         r["uniforms"].as_array().expect("uniforms").iter().filter_map(|u| u["name"].as_str()).collect();
     assert!(!uniforms.contains(&"view_samples") && uniforms.contains(&"sun_samples"), "{uniforms:?}");
-    // naga 30's SPIR-V writer has no specialization constants.
-    assert!(gdsky_naga::to_spirv(&lowered).is_err());
+    // In SPIR-V each override is a specialization constant: `OpSpecConstant` (opcode 50) with its
+    // default, decorated `SpecId` (decoration 1) with its id.
+    let words = gdsky_naga::to_spirv(&lowered).expect("SPIR-V with specialization constants");
+    let mut spec = Vec::new();
+    let mut spec_ids = Vec::new();
+    let mut at = 5;
+    while at < words.len() {
+        let (len, opcode) = ((words[at] >> 16) as usize, words[at] & 0xffff);
+        match opcode {
+            50 => spec.push((words[at + 2], words[at + 3])),
+            71 if words[at + 2] == 1 => spec_ids.push((words[at + 1], words[at + 3])),
+            _ => {}
+        }
+        at += len.max(1);
+    }
+    assert_eq!(spec.len(), 2, "{spec:?}");
+    let default_of =
+        |id: u32| spec_ids.iter().find(|s| s.1 == id).and_then(|s| spec.iter().find(|c| c.0 == s.0)).map(|c| c.1);
+    assert_eq!(default_of(0), Some(62.832f32.to_bits()));
+    assert_eq!(default_of(1), Some(24));
+}
+
+#[test]
+fn an_override_the_spirv_writer_folds_into_a_composite_is_refused() {
+    // `vec3(k)` of constants is an `OpConstantComposite`, which cannot hold a specialization
+    // constant: refused (E602) rather than written wrong; the WGSL is fine.
+    let src = "shader_type sky;\nuniform float k = 0.5;\nvoid sky() { COLOR = vec3(k) * EYEDIR; }\n";
+    let f = gdshader::check_source("splat.gdshader", src.as_bytes().to_vec(), None, &mut gdshader::FsLoader);
+    let lowered = gdsky_naga::lower_with_overrides(&f, &HashMap::new(), &["k".to_string()]).expect("lowers");
+    gdsky_naga::to_wgsl(&lowered).expect("WGSL");
+    let err = gdsky_naga::to_spirv(&lowered).expect_err("refused");
+    assert!(!err.reread && err.message.contains("cannot write the override `k` as a specialization constant"), "{err}");
 }
 
 #[test]

@@ -206,6 +206,22 @@ impl SkyShader {
     /// Compiles `wgsl` on `gpu` and builds the bind group layouts from the resources it
     /// declares (see [`bindings::discover`]).
     pub fn new(gpu: &Gpu, wgsl: &str, sub_passes: SubPasses) -> Result<SkyShader, RenderError> {
+        Self::with_source(gpu, wgsl, wgpu::ShaderSource::Wgsl(wgsl.into()), sub_passes)
+    }
+
+    /// Like [`SkyShader::new`], compiling the SPIR-V `spirv` (what `gdsky convert` writes as
+    /// `.spv`; its overrides are specialization constants) instead of `wgsl`, which must be the
+    /// same shader's WGSL: its resources give the bind group layouts.
+    pub fn from_spirv(gpu: &Gpu, wgsl: &str, spirv: &[u32], sub_passes: SubPasses) -> Result<SkyShader, RenderError> {
+        Self::with_source(gpu, wgsl, wgpu::ShaderSource::SpirV(spirv.into()), sub_passes)
+    }
+
+    fn with_source(
+        gpu: &Gpu,
+        wgsl: &str,
+        source: wgpu::ShaderSource<'_>,
+        sub_passes: SubPasses,
+    ) -> Result<SkyShader, RenderError> {
         let bindings = bindings::discover(wgsl)?;
         // `discover` parsed it already, so this parse succeeds.
         let far = naga::front::wgsl::parse_str(wgsl)
@@ -214,10 +230,7 @@ impl SkyShader {
             .unwrap_or(gdsky_naga::wrapper::FAR_PLANE_STANDARD);
         let device = &gpu.device;
         scoped(gpu, || {
-            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some("sky"),
-                source: wgpu::ShaderSource::Wgsl(wgsl.into()),
-            });
+            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor { label: Some("sky"), source });
             let groups = bindings.iter().map(|b| b.group + 1).max().unwrap_or(1);
             let group_layouts: Vec<_> = (0..groups)
                 .map(|group| {

@@ -1,7 +1,7 @@
 //! Specialization of the Freeman sky (issue #11) rendered on the Vulkan device (lavapipe
 //! without a GPU): the module with every uniform baked at its default (`gdsky convert --set`)
-//! and the module with scalar uniforms as WGSL overrides (`--override`) against the generic
-//! module drawn with the same values.
+//! and the module with scalar uniforms as overrides (`--override`), both as WGSL `override`s and
+//! as SPIR-V specialization constants, against the generic module drawn with the same values.
 //!
 //! One test function, so the environment is set before any thread reads it and one device
 //! serves every render. Without a Vulkan adapter the test fails: it does not skip.
@@ -48,6 +48,25 @@ fn difference(a: &[[f32; 4]], b: &[[f32; 4]]) -> (f64, bool) {
     (worst, identical)
 }
 
+/// Runs `spirv-val --target-env vulkan1.1` on a module; a failure (or no spirv-val) fails.
+fn spirv_val(words: &[u32]) {
+    let path = std::env::temp_dir().join(format!("gdsky-specialize-{}.spv", std::process::id()));
+    let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
+    std::fs::write(&path, bytes).expect("temp file");
+    let out = std::process::Command::new("spirv-val")
+        .args(["--target-env", "vulkan1.1"])
+        .arg(&path)
+        .output()
+        .expect("spirv-val runs (Debian package spirv-tools)");
+    let _ = std::fs::remove_file(&path);
+    assert!(
+        out.status.success(),
+        "spirv-val: {}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 #[test]
 fn baked_and_override_modules_render_as_the_generic_one() {
     let gpu = common::gpu();
@@ -84,11 +103,39 @@ fn baked_and_override_modules_render_as_the_generic_one() {
     }
     let over_wgsl = gdsky_naga::to_wgsl(&over_lowered).expect("WGSL");
     assert!(over_wgsl.contains("@id(0) override sun_intensity"), "{over_wgsl}");
+    // The same overrides as SPIR-V specialization constants: valid for Vulkan, read back by
+    // naga as overrides with their ids and defaults, and rendered through wgpu's SPIR-V input.
+    let over_spirv = gdsky_naga::to_spirv(&over_lowered).expect("SPIR-V with specialization constants");
+    spirv_val(&over_spirv);
+    let bytes: Vec<u8> = over_spirv.iter().flat_map(|w| w.to_le_bytes()).collect();
+    let reread = naga::front::spv::parse_u8_slice(&bytes, &naga::front::spv::Options::default()).expect("re-reads");
+    let read: Vec<(Option<u16>, Option<naga::Literal>)> = reread
+        .overrides
+        .iter()
+        .map(|(_, o)| {
+            let init = o.init.and_then(|i| match reread.global_expressions[i] {
+                naga::Expression::Literal(l) => Some(l),
+                _ => None,
+            });
+            (o.id, init)
+        })
+        .collect();
+    for expected in [
+        (Some(0), Some(naga::Literal::F32(62.832))),
+        (Some(1), Some(naga::Literal::F32(0.85))),
+        (Some(2), Some(naga::Literal::I32(24))),
+    ] {
+        assert!(read.contains(&expected), "{expected:?} not among the SPIR-V's overrides {read:?}");
+    }
     let cases: [(f32, f32, i32); 3] = [(62.832, 0.85, 24), (20.0, 0.7, 16), (120.0, 0.95, 8)];
     for (sun, g, samples) in cases {
         let constants =
             vec![("0".to_string(), f64::from(sun)), ("1".into(), f64::from(g)), ("2".into(), f64::from(samples))];
-        let over = SkyShader::new(&gpu, &over_wgsl, SubPasses::default()).expect("compiles").with_constants(constants);
+        let over =
+            SkyShader::new(&gpu, &over_wgsl, SubPasses::default()).expect("compiles").with_constants(constants.clone());
+        let over_spv = SkyShader::from_spirv(&gpu, &over_wgsl, &over_spirv, SubPasses::default())
+            .expect("the SPIR-V compiles")
+            .with_constants(constants);
         let p = FreemanParams {
             sun_intensity: f64::from(sun),
             mie_g_forward: f64::from(g),
@@ -103,5 +150,13 @@ fn baked_and_override_modules_render_as_the_generic_one() {
         );
         eprintln!("overrides ({sun}, {g}, {samples}): worst relative difference {worst:e}, bit-identical {identical}");
         assert!(worst <= MAX_REL, "overrides ({sun}, {g}, {samples}) differ from generic by {worst:e}");
+        let (worst, identical) = difference(
+            &draw(&over_spv, &over_material, Projection::Panorama),
+            &draw(&generic, &generic_material, Projection::Panorama),
+        );
+        eprintln!(
+            "specialization constants ({sun}, {g}, {samples}): worst relative difference {worst:e}, bit-identical {identical}"
+        );
+        assert!(worst <= MAX_REL, "SPIR-V ({sun}, {g}, {samples}) differs from generic by {worst:e}");
     }
 }
