@@ -41,6 +41,9 @@ pub struct EmitError {
     span: Option<naga::Span>,
     /// The function's name in the emitted text.
     function: Option<String>,
+    /// A known limit of what gdsky can write (an override as a specialization constant), not a
+    /// bug.
+    limitation: bool,
 }
 
 impl std::fmt::Display for EmitError {
@@ -57,9 +60,12 @@ impl EmitError {
         let code = if self.reread { REREAD } else { BACKEND };
         let mut d = Diagnostic::error(code, format!("gdsky emitted {} that does not hold up", self.format))
             .with_note(self.message.clone())
-            .with_note(
-                "this is a bug in gdsky's translation, not in the shader; nothing was written; please report it",
-            );
+            .with_note(if self.limitation {
+                "a limit of gdsky's SPIR-V output, not a bug; nothing was written (the override works in WGSL; \
+                 without `--override` of this uniform the SPIR-V is written)"
+            } else {
+                "this is a bug in gdsky's translation, not in the shader; nothing was written; please report it"
+            });
         match (self.span.and_then(|s| s.to_range()), &self.function) {
             (Some(range), Some(name)) => {
                 let (file, range) = front.locate(ast::Span::new(range.start, range.end));
@@ -90,6 +96,7 @@ pub fn to_wgsl(lowered: &Lowered) -> Result<String, EmitError> {
             reread: false,
             span: None,
             function: None,
+            limitation: false,
         },
     )?;
     reread_wgsl(&lowered.module, &text)?;
@@ -211,7 +218,7 @@ pub fn reread_wgsl(module: &naga::Module, text: &str) -> Result<(), EmitError> {
     let fail = |message: String, offset: Option<usize>| {
         let function = offset.and_then(|o| enclosing_wgsl_function(text, o));
         let span = function.as_deref().and_then(|name| function_span(module, name));
-        EmitError { format: "WGSL", message, reread: true, span, function }
+        EmitError { format: "WGSL", message, reread: true, span, function, limitation: false }
     };
     let reread = naga::front::wgsl::parse_str(text).map_err(|e| {
         let offset = e.location(text).map(|l| l.offset as usize);
@@ -237,13 +244,21 @@ pub fn reread_wgsl(module: &naga::Module, text: &str) -> Result<(), EmitError> {
 /// which each override is an ordinary constant with a sentinel value found nowhere else, and
 /// turns that one constant of the binary into the specialization constant.
 pub fn to_spirv(lowered: &Lowered) -> Result<Vec<u32>, EmitError> {
-    let fail = |message: String, reread| EmitError { format: "SPIR-V", message, reread, span: None, function: None };
+    let fail = |message: String, reread| EmitError {
+        format: "SPIR-V",
+        message,
+        reread,
+        span: None,
+        function: None,
+        limitation: false,
+    };
     let options = naga::back::spv::Options { lang_version: (1, 3), fake_missing_bindings: true, ..Default::default() };
     let words = if lowered.module.overrides.is_empty() {
         naga::back::spv::write_vec(&lowered.module, &lowered.info, &options, None)
             .map_err(|e| fail(format!("naga's SPIR-V writer failed: {e}"), false))?
     } else {
-        spec_constants(&lowered.module, &options).map_err(|m| fail(m, false))?
+        spec_constants(&lowered.module, &options)
+            .map_err(|(message, limitation)| EmitError { limitation, ..fail(message, false) })?
     };
     let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
     let mut reread = naga::front::spv::parse_u8_slice(&bytes, &naga::front::spv::Options::default())
@@ -298,10 +313,14 @@ mod op {
 /// used only as a value in functions, which is all `--override` produces. The refusals (E602)
 /// are cases where the constant cannot be found again in the binary: the writer folded it into
 /// a composite constant, or the sentinel is not unique.
-fn spec_constants(module: &naga::Module, options: &naga::back::spv::Options) -> Result<Vec<u32>, String> {
+///
+/// An error says whether it is such a refusal (`true`) or a failure of naga's writer or
+/// validator (a bug, `false`).
+fn spec_constants(module: &naga::Module, options: &naga::back::spv::Options) -> Result<Vec<u32>, (String, bool)> {
     use naga::{Expression as E, Literal as L};
-    let refuse =
-        |name: &str, why: String| format!("cannot write the override `{name}` as a specialization constant: {why}");
+    let refuse = |name: &str, why: String| {
+        (format!("cannot write the override `{name}` as a specialization constant: {why}"), true)
+    };
     // Every 32-bit literal of the module, as (is_float, signed, bits).
     let mut used = std::collections::HashSet::new();
     let mut note = |e: &E| match *e {
@@ -366,11 +385,12 @@ fn spec_constants(module: &naga::Module, options: &naga::back::spv::Options) -> 
             }
         }
     }
-    let info = validator().validate(&copy).map_err(|e| {
-        format!("the module with overrides as constants does not validate: {}", error_chain(e.as_inner()))
-    })?;
+    let info = validator()
+        .validate(&copy)
+        .map_err(|e| format!("the module with overrides as constants does not validate: {}", error_chain(e.as_inner())))
+        .map_err(|m| (m, false))?;
     let mut words = naga::back::spv::write_vec(&copy, &info, options, None)
-        .map_err(|e| format!("naga's SPIR-V writer failed: {e}"))?;
+        .map_err(|e| (format!("naga's SPIR-V writer failed: {e}"), false))?;
     // The instructions after the five header words: (start, opcode, length).
     let instructions = |words: &[u32]| {
         let mut at = 5;
@@ -433,7 +453,7 @@ fn spec_constants(module: &naga::Module, options: &naga::back::spv::Options) -> 
         .rfind(|i| i.0 < functions_start && op::is_annotation(i.1))
         .map(|i| i.0 + i.2)
         .or_else(|| list.iter().find(|i| op::is_type(i.1)).map(|i| i.0))
-        .ok_or_else(|| "the written SPIR-V has no type declarations".to_string())?;
+        .ok_or_else(|| ("the written SPIR-V has no type declarations".to_string(), false))?;
     words.splice(at..at, decorations);
     Ok(words)
 }

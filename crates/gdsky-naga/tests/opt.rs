@@ -186,6 +186,9 @@ fn an_override_the_spirv_writer_folds_into_a_composite_is_refused() {
     gdsky_naga::to_wgsl(&lowered).expect("WGSL");
     let err = gdsky_naga::to_spirv(&lowered).expect_err("refused");
     assert!(!err.reread && err.message.contains("cannot write the override `k` as a specialization constant"), "{err}");
+    let d = err.diagnostic(&f);
+    assert_eq!(d.code, gdsky_naga::BACKEND);
+    assert!(d.notes.iter().any(|n| n.contains("not a bug")), "{d:?}");
 }
 
 #[test]
