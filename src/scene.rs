@@ -808,18 +808,6 @@ pub fn is_integer_type(ty: &gdshader::check::types::Type) -> bool {
     matches!(ty, Type::Scalar(Scalar::Int | Scalar::UInt) | Type::Vector(Scalar::Int | Scalar::UInt, _))
 }
 
-/// A uniform's default value in `--set` syntax (for `--bake-scene` without a scene file).
-pub fn const_text(v: &gdshader::check::consteval::ConstValue) -> String {
-    use gdshader::check::consteval::ConstValue;
-    match v {
-        ConstValue::Bool(b) => b.to_string(),
-        ConstValue::Int(i) => i.to_string(),
-        ConstValue::UInt(u) => u.to_string(),
-        ConstValue::Float(f) => format!("{f:?}"),
-        ConstValue::Composite(items) => items.iter().map(const_text).collect::<Vec<_>>().join(","),
-    }
-}
-
 /// The uniforms `--bake-scene` bakes: with a scene, the ones it fixes (then the `--set` pairs
 /// over them); without one, every scalar or vector uniform with a default, at its default.
 pub fn bake_values(
@@ -827,17 +815,10 @@ pub fn bake_values(
     scene: Option<&SceneFile>,
     sets: &[(String, String)],
 ) -> std::collections::HashMap<String, String> {
-    use gdshader::check::types::Type;
     let mut baked = std::collections::HashMap::new();
     match scene {
         Some(scene) => baked.extend(scene.uniform_pairs()),
-        None => {
-            for u in &shader.uniforms {
-                if let (Some(d), Type::Scalar(_) | Type::Vector(..)) = (&u.default, &u.ty) {
-                    baked.insert(u.name.clone(), const_text(d));
-                }
-            }
-        }
+        None => baked.extend(gdsky_naga::reflect::defaults_as_set(shader)),
     }
     baked.extend(sets.iter().cloned());
     baked

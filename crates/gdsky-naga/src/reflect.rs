@@ -13,6 +13,29 @@ use gdshader::check::types::{Scalar, Type};
 use serde_json::{Value, json};
 use std::collections::HashMap;
 
+/// A value in `--set` syntax, as [`parse_value`] reads it back (`1.5`, `24`, `true`,
+/// `0.1,0.2,0.3`).
+pub fn value_text(v: &ConstValue) -> String {
+    match v {
+        ConstValue::Bool(b) => b.to_string(),
+        ConstValue::Int(i) => i.to_string(),
+        ConstValue::UInt(u) => u.to_string(),
+        ConstValue::Float(f) => format!("{f:?}"),
+        ConstValue::Composite(items) => items.iter().map(value_text).collect::<Vec<_>>().join(","),
+    }
+}
+
+/// Every scalar and vector uniform of `shader` that has a default, at its default, in `--set`
+/// syntax: what baking a shader "at its defaults" bakes.
+pub fn defaults_as_set(shader: &CheckedShader) -> HashMap<String, String> {
+    shader
+        .uniforms
+        .iter()
+        .filter(|u| matches!(u.ty, Type::Scalar(_) | Type::Vector(..)))
+        .filter_map(|u| Some((u.name.clone(), value_text(u.default.as_ref()?))))
+        .collect()
+}
+
 /// Parses a `--set` value for a uniform of type `ty`: `1.5`, `24`, `true`, or comma-separated
 /// components for vectors (`0.1,0.2,0.3`).
 ///

@@ -57,7 +57,8 @@ fn render_time(c: &mut Criterion) {
     // Specialization (issue #11): every uniform baked at its default (`--set`), and every scalar
     // uniform as a WGSL override (`--override`) at its default.
     let shader = front.shader.as_ref().expect("checked");
-    let baked_lowered = gdsky_naga::lower_with(&front, &defaults(shader)).expect("the baked sky lowers");
+    let baked_lowered =
+        gdsky_naga::lower_with(&front, &gdsky_naga::reflect::defaults_as_set(shader)).expect("the baked sky lowers");
     let baked = gdsky_naga::to_wgsl(&baked_lowered).expect("WGSL");
     let baked_material = freeman_material(&baked_lowered, &FreemanParams::default());
     let scalars: Vec<String> = shader
@@ -151,21 +152,6 @@ fn render_time(c: &mut Criterion) {
         group.bench_function(*name, |b| b.iter_custom(|iters| (0..iters).map(|_| render(shader, material)).sum()));
     }
     group.finish();
-}
-
-/// Every scalar and vector uniform of `shader` at its default, as `--set` texts.
-fn defaults(shader: &gdshader::CheckedShader) -> std::collections::HashMap<String, String> {
-    use gdshader::check::consteval::ConstValue;
-    fn text(v: &ConstValue) -> String {
-        match v {
-            ConstValue::Bool(b) => b.to_string(),
-            ConstValue::Int(i) => i.to_string(),
-            ConstValue::UInt(u) => u.to_string(),
-            ConstValue::Float(f) => format!("{f:?}"),
-            ConstValue::Composite(items) => items.iter().map(text).collect::<Vec<_>>().join(","),
-        }
-    }
-    shader.uniforms.iter().filter_map(|u| Some((u.name.clone(), text(u.default.as_ref()?)))).collect()
 }
 
 criterion_group!(benches, render_time);

@@ -8,7 +8,6 @@
 
 mod common;
 
-use gdshader::check::consteval::ConstValue;
 use skyref::{FreemanParams, Projection, Scene};
 use skyrun::{SkyBuiltins, SkyShader, SubPasses, freeman_material};
 use std::collections::HashMap;
@@ -18,20 +17,6 @@ const HEIGHT: u32 = 32;
 /// Bound on the relative difference per channel: |a − b| / max(|b|, FLOOR).
 const MAX_REL: f64 = 1e-6;
 const FLOOR: f64 = 1e-4;
-
-/// Every uniform at its default, as `--set` texts.
-fn defaults(shader: &gdshader::CheckedShader) -> HashMap<String, String> {
-    fn text(v: &ConstValue) -> String {
-        match v {
-            ConstValue::Bool(b) => b.to_string(),
-            ConstValue::Int(i) => i.to_string(),
-            ConstValue::UInt(u) => u.to_string(),
-            ConstValue::Float(f) => format!("{f:?}"),
-            ConstValue::Composite(items) => items.iter().map(text).collect::<Vec<_>>().join(","),
-        }
-    }
-    shader.uniforms.iter().filter_map(|u| Some((u.name.clone(), text(u.default.as_ref()?)))).collect()
-}
 
 /// The largest relative difference between two images, and whether they are bit-identical.
 fn difference(a: &[[f32; 4]], b: &[[f32; 4]]) -> (f64, bool) {
@@ -80,7 +65,8 @@ fn baked_and_override_modules_render_as_the_generic_one() {
     };
 
     // Baked at the defaults: every uniform folded into the module.
-    let baked_lowered = gdsky_naga::lower_with(&front, &defaults(shader)).expect("the baked sky lowers");
+    let baked_lowered =
+        gdsky_naga::lower_with(&front, &gdsky_naga::reflect::defaults_as_set(shader)).expect("the baked sky lowers");
     assert!(baked_lowered.uniforms.is_empty(), "every uniform is baked");
     let baked_wgsl = gdsky_naga::to_wgsl(&baked_lowered).expect("WGSL");
     assert!(!baked_wgsl.contains("var<uniform> material"), "no material block is left:\n{baked_wgsl}");
