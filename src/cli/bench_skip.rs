@@ -220,13 +220,7 @@ pub fn table(rows: &[SkipRow]) -> String {
         "tm/true"
     );
     for r in rows {
-        let base = rows
-            .iter()
-            .find(|b| b.shader == r.shader && b.kind == r.kind && (b.variant == "0%" || b.variant == "full"))
-            .map(|b| b.median);
-        let ratio = base
-            .map(|b| if r.kind == "occluder" { ms(r.median) / ms(b) } else { ms(b) / ms(r.median) })
-            .unwrap_or(f64::NAN);
+        let ratio = ratio(rows, r);
         let e = |s: &Option<ErrorStats>| match s {
             Some(s) => format!("{:>9.2e} {:>9.2e} {:>10.2e}", s.mean, s.p99, s.mean_tonemapped),
             None => format!("{:>9} {:>9} {:>10}", "-", "-", "-"),
@@ -246,6 +240,15 @@ pub fn table(rows: &[SkipRow]) -> String {
     out
 }
 
+/// A row's ratio against its baseline (same shader and kind, variant "0%" or "full"): for the
+/// occluder, time / time at 0 %; for a sky resolution, time at full / time (a speed-up).
+fn ratio(rows: &[SkipRow], r: &SkipRow) -> f64 {
+    rows.iter()
+        .find(|b| b.shader == r.shader && b.kind == r.kind && (b.variant == "0%" || b.variant == "full"))
+        .map(|b| if r.kind == "occluder" { ms(r.median) / ms(b.median) } else { ms(b.median) / ms(r.median) })
+        .unwrap_or(f64::NAN)
+}
+
 /// skipping.csv: shader, kind, variant, time_ms, ratio (occluder: time / time at 0 %;
 /// resolution: time at full / time), then mean_rel, p99_rel, mean_abs_tonemapped against full
 /// resolution and against the converged truth (empty where not measured).
@@ -254,13 +257,7 @@ pub fn csv(rows: &[SkipRow]) -> String {
         "shader,kind,variant,time_ms,ratio,mean_rel_vs_full,p99_rel_vs_full,mean_abs_tonemapped_vs_full,mean_rel_vs_truth,p99_rel_vs_truth,mean_abs_tonemapped_vs_truth\n",
     );
     for r in rows {
-        let base = rows
-            .iter()
-            .find(|b| b.shader == r.shader && b.kind == r.kind && (b.variant == "0%" || b.variant == "full"))
-            .map(|b| b.median);
-        let ratio = base
-            .map(|b| if r.kind == "occluder" { ms(r.median) / ms(b) } else { ms(b) / ms(r.median) })
-            .unwrap_or(f64::NAN);
+        let ratio = ratio(rows, r);
         let e = |s: &Option<ErrorStats>| match s {
             Some(s) => format!("{:.6e},{:.6e},{:.6e}", s.mean, s.p99, s.mean_tonemapped),
             None => ",,".into(),
