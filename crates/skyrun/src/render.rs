@@ -292,8 +292,18 @@ impl SkyShader {
     /// default.
     #[must_use]
     pub fn with_constants(mut self, constants: Vec<(String, f64)>) -> Self {
-        self.constants = constants;
+        self.set_constants(constants);
         self
+    }
+
+    /// Like [`SkyShader::with_constants`], in place: when the values differ from the current
+    /// ones, the cached pipelines are dropped (their constants are fixed at creation), so the
+    /// next render builds its pipelines again, which costs a driver compile of the module.
+    pub fn set_constants(&mut self, constants: Vec<(String, f64)>) {
+        if constants != self.constants {
+            self.constants = constants;
+            self.pipelines.get_mut().unwrap_or_else(|poisoned| poisoned.into_inner()).clear();
+        }
     }
 
     /// The resources the shader declares.
