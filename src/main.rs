@@ -32,7 +32,8 @@ enum Command {
     ///
     /// Converts FILE (default: the bundled Freeman sky), renders it on a GPU, or on lavapipe
     /// (Mesa's CPU Vulkan driver) where there is none, and writes RGBA f32 linear radiance.
-    /// Uniforms keep the shader's defaults unless set with --set. The outputs are checked before
+    /// Uniforms keep the shader's defaults unless set with --set; --override NAME renders a scalar
+    /// uniform as a pipeline constant of one module (the same image). The outputs are checked before
     /// anything is rendered: their directory must exist, and a directory, device, FIFO or socket
     /// is never replaced (a symbolic link is written through to its target). Exit status: 0
     /// written, 1 the shader or a flag is invalid, 2 no Vulkan adapter or a file cannot be read

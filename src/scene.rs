@@ -16,6 +16,7 @@
 //! time = 0.0
 //! sky_resolution = "full"                          # full | half | quarter
 //! occluder = "mask.png"
+//! overrides = ["sun_intensity"]                  # scalar uniforms as pipeline constants
 //!
 //! [sun]                                            # LIGHT0
 //! elevation = 10.0
@@ -215,6 +216,16 @@ pub struct UniformSetting {
     pub span: Span<usize>,
 }
 
+/// A uniform the scene asks to be a pipeline-overridable constant (`overrides = [...]`, as
+/// `--override NAME`), and where its name is in the file.
+#[derive(Clone, Debug, PartialEq)]
+pub struct OverrideSetting {
+    /// The uniform's name.
+    pub name: String,
+    /// Byte range of the name in the scene file.
+    pub span: Span<usize>,
+}
+
 /// Keyframes `[frame, value]`, ascending; between two, linear; before the first and after the
 /// last, held.
 #[derive(Clone, Debug, PartialEq)]
@@ -333,6 +344,9 @@ pub struct SceneFile {
     pub pitch: Option<f64>,
     /// Uniform values the scene fixes, in file order.
     pub uniforms: Vec<UniformSetting>,
+    /// Uniforms emitted as pipeline-overridable constants (`overrides`), in file order, each
+    /// once.
+    pub overrides: Vec<OverrideSetting>,
     /// The occluder mask, resolved against the scene file's folder.
     pub occluder: Option<PathBuf>,
     /// The sky's resolution.
@@ -379,6 +393,7 @@ struct RawScene {
     lights: Option<Spanned<Vec<RawLight>>>,
     camera: Option<RawCamera>,
     uniforms: Option<BTreeMap<String, Spanned<UniformValueRaw>>>,
+    overrides: Option<Vec<Spanned<String>>>,
     occluder: Option<Spanned<String>>,
     sky_resolution: Option<SkyResolution>,
     animate: Option<RawAnimate>,
@@ -659,6 +674,13 @@ impl SceneFile {
             .flatten()
             .map(|(name, v)| UniformSetting { name: name.clone(), text: uniform_text(v.get_ref()), span: v.span() })
             .collect();
+        // A name listed twice is one override: the list says which uniforms, not how often.
+        let mut overrides: Vec<OverrideSetting> = Vec::new();
+        for o in raw.overrides.iter().flatten() {
+            if !overrides.iter().any(|x| x.name == *o.get_ref()) {
+                overrides.push(OverrideSetting { name: o.get_ref().clone(), span: o.span() });
+            }
+        }
         let animate = raw.animate.as_ref().and_then(|a| {
             let frames = *a.frames.get_ref();
             if !(1..=MAX_FRAMES).contains(&frames) {
@@ -741,6 +763,7 @@ impl SceneFile {
             yaw,
             pitch,
             uniforms,
+            overrides,
             occluder: raw.occluder.as_ref().map(resolve),
             sky_resolution: raw.sky_resolution,
             animate,
@@ -750,8 +773,9 @@ impl SceneFile {
     }
 
     /// Checks the scene's uniforms (values and keyframes) against `shader`: each must be a
-    /// uniform of it, and each value must parse as its type (the `--set` rules). The error is
-    /// rendered, located in the scene file.
+    /// uniform of it, and each value must parse as its type (the `--set` rules); each name in
+    /// `overrides` must be a scalar material uniform of it. The error is rendered, located in
+    /// the scene file.
     pub fn check_uniforms(&self, shader: &gdshader::CheckedShader) -> Result<(), String> {
         let mut errors = Vec::new();
         let names: Vec<&str> = shader.uniforms.iter().map(|u| u.name.as_str()).collect();
@@ -779,6 +803,28 @@ impl SceneFile {
         for u in &self.uniforms {
             check(&u.name, &u.text, &u.span, &mut errors);
         }
+        for o in &self.overrides {
+            let name = &o.name;
+            let Some(u) = shader.uniforms.iter().find(|u| u.name == *name) else {
+                let mut d = Diagnostic::error(SCENE_VALUE, format!("the shader has no uniform `{name}` to override"))
+                    .with_primary(self.file, o.span.clone(), format!("`overrides`: `{name}`"));
+                d = match did_you_mean(name, names.iter().copied()) {
+                    Some(m) => d.with_note(format!("did you mean `{m}`?")),
+                    None => d.with_note(format!("its uniforms are: {}", names.join(", "))),
+                };
+                errors.push(d);
+                continue;
+            };
+            if u.global || !matches!(u.ty, gdshader::check::types::Type::Scalar(_)) {
+                let m = format!(
+                    "`{name}` cannot be an override: only scalar material uniforms can (WGSL overrides and SPIR-V \
+                     specialization constants are scalars); it is a{} `{}`",
+                    if u.global { " global" } else { "" },
+                    u.type_name
+                );
+                errors.push(Diagnostic::error(SCENE_VALUE, m.clone()).with_primary(self.file, o.span.clone(), m));
+            }
+        }
         for t in self.animate.iter().flat_map(|a| &a.uniforms) {
             let integer = shader.uniforms.iter().any(|u| u.name == t.name && is_integer_type(&u.ty));
             for (frame, _) in &t.keys {
@@ -794,6 +840,19 @@ impl SceneFile {
         let span = self.uniforms.iter().find(|u| u.name == name).map(|u| u.span.clone()).unwrap_or(0..0);
         let d = Diagnostic::error(SCENE_VALUE, message.to_string()).with_primary(self.file, span, message.to_string());
         render_human(&self.db, &[d], false)
+    }
+
+    /// A located error at the entry `name` of `overrides` (the whole file when it does not list
+    /// it), rendered.
+    pub fn override_error(&self, name: &str, message: &str) -> String {
+        let span = self.overrides.iter().find(|o| o.name == name).map(|o| o.span.clone()).unwrap_or(0..0);
+        let d = Diagnostic::error(SCENE_VALUE, message.to_string()).with_primary(self.file, span, message.to_string());
+        render_human(&self.db, &[d], false)
+    }
+
+    /// The names of `overrides`, in file order.
+    pub fn override_names(&self) -> Vec<String> {
+        self.overrides.iter().map(|o| o.name.clone()).collect()
     }
 
     /// The uniforms the scene fixes as `(name, text)` pairs (`--set` syntax).
@@ -862,6 +921,15 @@ mod tests {
         assert_eq!(a.dt, 0.5);
         let track = a.sun_elevation.unwrap();
         assert_eq!((track.at(0), track.at(5), track.at(9)), ([-5.0], [20.5], [20.5]));
+    }
+
+    #[test]
+    fn overrides_keep_file_order_once_each_with_their_place() {
+        let s = parse("overrides = [\"b\", \"a\", \"b\"]\n").unwrap();
+        assert_eq!(s.override_names(), vec!["b".to_string(), "a".to_string()]);
+        assert_eq!((s.overrides[0].span.clone(), s.overrides[1].span.clone()), (13..16, 18..21));
+        let err = parse("overrides = \"a\"\n").unwrap_err().to_string();
+        assert!(err.contains("dir/s.toml:1:13"), "{err}");
     }
 
     #[test]

@@ -28,6 +28,14 @@
 //! differs from the frame's; the other faces keep what they had, so a change takes up to six
 //! frames to reach every face, as in Godot.
 //!
+//! # Overrides
+//!
+//! With `--override NAME` (or the scene's `overrides`), the uniform is a pipeline-overridable
+//! constant: one module serves the whole sequence, and each frame's value is given when the
+//! pipeline is created. A frame whose override values differ from the previous render's
+//! builds its pipelines again (a driver compile of the module), so an override that changes
+//! every frame pays that compile every frame; the values are part of the reuse key.
+//!
 //! # Timing
 //!
 //! After one warm-up render (the driver compiles the pipeline), the sequence is rendered with
@@ -35,7 +43,8 @@
 //! rendered and nothing written: the time of rendering every frame, measured in the same run.
 
 use super::scene::{
-    ProjectionArg, SceneArgs, SkipArgs, check_scene_uniforms, load_shader_baking, open_gpu, open_input, strip,
+    ProjectionArg, SceneArgs, SkipArgs, bake_reason, check_override_conflicts, check_scene_uniforms,
+    load_shader_specialized, open_gpu, open_input, override_names, strip,
 };
 use super::{environment, usage};
 use clap::{ArgMatches, Args};
@@ -58,6 +67,11 @@ pub struct AnimateArgs {
     /// shader as constants.
     #[arg(long)]
     bake_scene: bool,
+    /// Emit a scalar uniform as a pipeline-overridable constant: one module for the sequence,
+    /// each frame's value given at pipeline creation (a changed value rebuilds the pipeline,
+    /// which costs a shader compile). Adds to the scene file's `overrides`. Repeatable.
+    #[arg(long = "override", value_name = "NAME")]
+    overrides: Vec<String>,
     /// Render every frame (no reuse; incremental mode still renders one face a frame).
     #[arg(long)]
     no_reuse: bool,
@@ -81,6 +95,8 @@ type FaceRender = (Vec<u8>, Vec<[f32; 4]>);
 struct Frame {
     builtins: SkyBuiltins,
     material: Vec<u8>,
+    /// The overrides' values (`@id` → value), given at pipeline creation.
+    constants: Vec<(String, f64)>,
     summary: String,
 }
 
@@ -150,6 +166,9 @@ fn reuse_key(frame: &Frame, used: &dyn Fn(&str) -> bool, camera: bool) -> Vec<u8
         f32s(&mut key, &[b.tan_half_fov]);
     }
     key.extend(&frame.material);
+    for (_, v) in &frame.constants {
+        key.extend(v.to_bits().to_le_bytes());
+    }
     key
 }
 
@@ -192,7 +211,13 @@ fn animate(args: &AnimateArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
 
     let cli_sets = args.scene.overrides().map_err(usage)?;
     let keyframed: Vec<String> = anim.uniforms.iter().map(|t| t.name.clone()).collect();
-    let loaded = load_shader_baking(input.shader.as_deref(), |shader| {
+    let override_names = override_names(Some(file), &args.overrides);
+    // A keyframed uniform is never baked, so only a `--set` or the scene's `[uniforms]` under
+    // `--bake-scene` can conflict with an override.
+    check_override_conflicts(&override_names, Some(file), |n| {
+        if keyframed.iter().any(|k| k == n) { None } else { bake_reason(n, Some(file), &cli_sets, args.bake_scene) }
+    })?;
+    let loaded = load_shader_specialized(input.shader.as_deref(), Some(file), &override_names, |shader| {
         if !args.bake_scene {
             return Default::default();
         }
@@ -218,16 +243,28 @@ fn animate(args: &AnimateArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
             }
         }
         let material = loaded.material(&sets).map_err(|e| usage(format!("frame {k}: {e}")))?;
+        let constants = loaded.constants(&sets).map_err(|e| usage(format!("frame {k}: {e}")))?;
         let summary = format!(
             "{},{},{},{},{},{},{},{},{}",
             s.time, s.sun.0, s.sun.1, s.position.0, s.position.1, s.position.2, s.yaw, s.pitch, s.fov
         );
-        frames.push(Frame { builtins: s.builtins(Some(file), width, height), material, summary });
+        frames.push(Frame { builtins: s.builtins(Some(file), width, height), material, constants, summary });
     }
 
     let gpu = open_gpu()?;
-    let shader = loaded.compile(&gpu)?;
+    // One module for the sequence; with overrides, each frame's values are set before it
+    // renders (the pipelines are rebuilt only when they change).
+    let shader = std::cell::RefCell::new(loaded.compile(&gpu)?);
+    let current: std::cell::RefCell<Option<Vec<(String, f64)>>> = std::cell::RefCell::new(None);
+    let rebuilds = std::cell::Cell::new(0u32);
     let render_view = |frame: &Frame, view: Projection| -> Result<Vec<[f32; 4]>, ExitCode> {
+        let mut shader = shader.borrow_mut();
+        let mut current = current.borrow_mut();
+        if !loaded.overrides.is_empty() && current.as_ref() != Some(&frame.constants) {
+            rebuilds.set(rebuilds.get() + 1);
+            shader.set_constants(frame.constants.clone());
+            *current = Some(frame.constants.clone());
+        }
         shader
             .render_with(&gpu, view, width, height, &frame.builtins, &frame.material, &options)
             .map(|r| r.pixels)
@@ -314,6 +351,14 @@ fn animate(args: &AnimateArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
     );
     let ms = |d: Duration| d.as_secs_f64() * 1e3;
     println!("time: rendering {:.1} ms, with writing {:.1} ms", ms(render_time), ms(wall));
+    if !loaded.overrides.is_empty() {
+        // The warm-up and the reuse pass so far; each build is a driver compile, in the time above.
+        println!(
+            "overrides: {} (one module; pipelines built for {} sets of values, a compile each)",
+            loaded.overrides.join(", "),
+            rebuilds.get()
+        );
+    }
     if !args.no_baseline {
         // Every view of every frame, nothing written: what rendering every frame costs.
         let t0 = Instant::now();

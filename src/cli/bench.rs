@@ -18,7 +18,8 @@
 //! match it bit for bit. Anything else is recomputed.
 
 use super::scene::{
-    LoadedShader, ProjectionArg, SceneArgs, check_scene_uniforms, open_gpu, open_input, set_freeman, strip,
+    LoadedShader, ProjectionArg, SceneArgs, bake_reason, check_override_conflicts, check_scene_uniforms, open_gpu,
+    open_input, override_names, set_freeman, strip,
 };
 use super::sweep::{self, ErrorStats};
 use super::{environment, usage};
@@ -48,6 +49,13 @@ pub struct BenchArgs {
     /// default.
     #[arg(long)]
     bake_scene: bool,
+    /// Emit a scalar uniform as a pipeline-overridable constant: one module, each
+    /// configuration's value given at pipeline creation (a swept knob gets a pipeline per
+    /// value). Adds to the scene file's `overrides`. With --skipping, the `uniforms` rows time
+    /// these (else the swept knobs) as overrides against the generic and the baked module.
+    /// Repeatable.
+    #[arg(long = "override", value_name = "NAME")]
+    overrides: Vec<String>,
     /// Folder for bench.csv and bench.png (created if missing; checked before any work).
     #[arg(short = 'o', long = "out-dir", value_name = "DIR", default_value = "out/bench")]
     out_dir: PathBuf,
@@ -178,14 +186,62 @@ fn with_knobs(base: &FreemanParams, knobs: &[Knob], values: &[i32]) -> Result<Fr
 }
 
 /// The material block of a Freeman-compatible shader from skyref's parameters, leaving out the
-/// uniforms baked into constants.
+/// uniforms baked into constants and the overrides (pipeline constants, [`constants`]).
 fn material(loaded: &LoadedShader, params: &FreemanParams) -> Result<Vec<u8>, skyrun::MaterialError> {
-    if loaded.baked.is_empty() {
+    if loaded.baked.is_empty() && loaded.overrides.is_empty() {
         return sweep::material(loaded, params);
     }
-    let values: Vec<_> =
-        skyrun::freeman_values(params).into_iter().filter(|(name, _)| !loaded.baked.contains_key(*name)).collect();
+    let values: Vec<_> = skyrun::freeman_values(params)
+        .into_iter()
+        .filter(|(name, _)| !loaded.baked.contains_key(*name) && !loaded.overrides.iter().any(|o| o == name))
+        .collect();
     skyrun::material_bytes(&loaded.lowered, &values)
+}
+
+/// The pipeline constants of a Freeman-compatible shader's overrides from skyref's parameters,
+/// rounded to f32 as the material block would hold them.
+fn constants(loaded: &LoadedShader, params: &FreemanParams) -> Vec<(String, f64)> {
+    let values = skyrun::freeman_values(params);
+    loaded
+        .overrides
+        .iter()
+        .enumerate()
+        .filter_map(|(id, name)| {
+            let (_, v) = values.iter().find(|(n, _)| n == name)?;
+            let v = match *v {
+                skyrun::UniformValue::Float(f) => f64::from(f),
+                skyrun::UniformValue::Int(i) => f64::from(i),
+                skyrun::UniformValue::UInt(u) => f64::from(u),
+                skyrun::UniformValue::Bool(b) => f64::from(u8::from(b)),
+                // Overrides are scalars; lowering refused anything else.
+                _ => return None,
+            };
+            Some((id.to_string(), v))
+        })
+        .collect()
+}
+
+/// The compiled shaders of a sweep: one per distinct set of override values (one in all when
+/// no swept knob is an override), and which one each configuration uses.
+struct Compiled {
+    shaders: Vec<(Vec<(String, f64)>, skyrun::SkyShader)>,
+}
+
+impl Compiled {
+    /// The shader with `constants`, compiled on first use.
+    fn index(
+        &mut self,
+        loaded: &LoadedShader,
+        gpu: &skyrun::Gpu,
+        constants: Vec<(String, f64)>,
+    ) -> Result<usize, ExitCode> {
+        if let Some(i) = self.shaders.iter().position(|(c, _)| *c == constants) {
+            return Ok(i);
+        }
+        let shader = loaded.compile(gpu)?.with_constants(constants.clone());
+        self.shaders.push((constants, shader));
+        Ok(self.shaders.len() - 1)
+    }
 }
 
 /// A uniform value in `--set` syntax.
@@ -217,6 +273,7 @@ fn bench(args: &BenchArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
         out_dir: args.out_dir.clone(),
         cache_dir: args.cache_dir.clone(),
         skipping: args.skipping.clone(),
+        overrides: args.overrides.clone(),
         ..*args
     };
     let (views, width, height) = args.scene.views().map_err(usage)?;
@@ -228,8 +285,18 @@ fn bench(args: &BenchArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
         return Err(usage("the sweep is empty"));
     }
     super::check_output_dir(&args.out_dir, true, &["bench.csv", "bench.png"])?;
+    let cli_sets = super::scene::SceneArgs::overrides(&args.scene).map_err(usage)?;
+    let override_names = override_names(input.scene.as_ref(), &args.overrides);
+    check_override_conflicts(&override_names, input.scene.as_ref(), |n| {
+        if knobs.iter().any(|k| k.name == n) {
+            None
+        } else {
+            bake_reason(n, input.scene.as_ref(), &cli_sets, args.bake_scene)
+        }
+    })?;
     let mut loaded = sweep::load_freeman(args.file.as_deref())?;
     check_scene_uniforms(input.scene.as_ref(), &loaded)?;
+    let mut baked = std::collections::HashMap::new();
     if args.bake_scene {
         // The values baked are the ones the material would carry (skyref's defaults with the
         // scene's uniforms and --set over them), so the truth still matches: with a scene file,
@@ -241,9 +308,13 @@ fn bench(args: &BenchArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
             }
             None => sweep::freeman_names().into_iter().map(String::from).collect(),
         };
-        let baked: std::collections::HashMap<String, String> = skyrun::freeman_values(&base)
+        baked = skyrun::freeman_values(&base)
             .into_iter()
-            .filter(|(name, _)| fixed.iter().any(|f| f == name) && !knobs.iter().any(|k| k.name == *name))
+            .filter(|(name, _)| {
+                fixed.iter().any(|f| f == name)
+                    && !knobs.iter().any(|k| k.name == *name)
+                    && !override_names.iter().any(|o| o == name)
+            })
             .map(|(name, value)| (name.to_string(), uniform_text(value)))
             .collect();
         let mut names: Vec<&String> = baked.keys().collect();
@@ -253,13 +324,17 @@ fn bench(args: &BenchArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
             names.len(),
             names.iter().map(|n| n.as_str()).collect::<Vec<_>>().join(", ")
         );
-        loaded.rebake(baked)?;
+    }
+    if args.bake_scene || !override_names.is_empty() {
+        loaded.respecialize(baked, &override_names)?;
+    }
+    if !override_names.is_empty() {
+        eprintln!("overrides: {}", override_names.join(", "));
     }
     let shader_name = args.file.as_ref().map(|f| f.display().to_string()).unwrap_or("freeman_sky (bundled)".into());
     let gpu = open_gpu()?;
     let adapter = gpu.adapter_info();
     let timer = if gpu.has_timestamps() { "gpu_timestamps" } else { "wall" };
-    let shader = loaded.compile(&gpu)?;
     let scene = args.scene.scene();
     let mut builtins = SkyBuiltins::from_scene(&scene, width, height);
     builtins.time = args.scene.time;
@@ -289,13 +364,22 @@ fn bench(args: &BenchArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
     }
     bar.inc(1);
 
-    let materials: Vec<Vec<u8>> = configs
+    let params: Vec<FreemanParams> =
+        configs.iter().map(|values| with_knobs(&base, &knobs, values)).collect::<Result<_, _>>().map_err(usage)?;
+    let materials: Vec<Vec<u8>> = params
         .iter()
-        .map(|values| with_knobs(&base, &knobs, values).and_then(|p| material(&loaded, &p).map_err(|e| e.to_string())))
+        .map(|p| material(&loaded, p).map_err(|e| e.to_string()))
         .collect::<Result<_, _>>()
         .map_err(usage)?;
+    // Each configuration's pipelines carry its override values: a module compiled per distinct
+    // set (before any timing), so switching configurations in the round-robin rebuilds nothing.
+    let mut compiled = Compiled { shaders: Vec::new() };
+    let shader_of: Vec<usize> =
+        params.iter().map(|p| compiled.index(&loaded, &gpu, constants(&loaded, p))).collect::<Result<_, _>>()?;
+    let base_shader = compiled.index(&loaded, &gpu, constants(&loaded, &base))?;
+    let shaders: Vec<&skyrun::SkyShader> = compiled.shaders.iter().map(|(_, s)| s).collect();
     let label = |values: &[i32]| values.iter().map(i32::to_string).collect::<Vec<_>>().join("/");
-    let render_all = |material: &[u8]| -> Result<(ViewImages, Duration), ExitCode> {
+    let render_all = |shader: &skyrun::SkyShader, material: &[u8]| -> Result<(ViewImages, Duration), ExitCode> {
         let mut images = Vec::with_capacity(views.len());
         let mut time = Duration::ZERO;
         for &view in &views {
@@ -314,9 +398,9 @@ fn bench(args: &BenchArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
     // compilation; its pixels are the ones measured (every render of a configuration gives the
     // same pixels).
     let mut errors = Vec::with_capacity(configs.len());
-    for ((values, material), truth_params) in configs.iter().zip(&materials).zip(&truth_params) {
+    for (i, ((values, material), truth_params)) in configs.iter().zip(&materials).zip(&truth_params).enumerate() {
         bar.set_message(format!("{}: warm-up render and error", label(values)));
-        let (images, _) = render_all(material)?;
+        let (images, _) = render_all(shaders[shader_of[i]], material)?;
         let image = strip(images, width, height).map_err(usage)?;
         let truth = &truths.iter().find(|(p, _)| p == truth_params).ok_or(ExitCode::from(1))?.1;
         errors.push(sweep::error_stats(&image.pixels, truth));
@@ -327,8 +411,8 @@ fn bench(args: &BenchArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
     let mut times = vec![Vec::with_capacity(args.runs as usize); configs.len()];
     for run in 0..args.runs {
         bar.set_message(format!("timing: round {} of {} on {}", run + 1, args.runs, adapter.name));
-        for (material, times) in materials.iter().zip(&mut times) {
-            times.push(render_all(material)?.1);
+        for (i, (material, times)) in materials.iter().zip(&mut times).enumerate() {
+            times.push(render_all(shaders[shader_of[i]], material)?.1);
             bar.inc(1);
         }
     }
@@ -378,13 +462,40 @@ fn bench(args: &BenchArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
     print!("{}", front_table(&knobs, &rows));
     let mut reduced = Vec::new();
     if args.skipping.skipping {
-        let base_material = sweep::material(&loaded, &base).map_err(|e| usage(e.to_string()))?;
+        let base_material = material(&loaded, &base).map_err(|e| usage(e.to_string()))?;
+        // The `uniforms` rows: the named overrides, else the swept knobs, as a generic module
+        // (material block), baked into constants, and as overrides, each at the base values.
+        let varied: Vec<String> = if override_names.is_empty() {
+            knobs.iter().map(|k| k.name.clone()).collect()
+        } else {
+            override_names.clone()
+        };
+        let mut modules = Vec::new();
+        for kind in ["generic", "baked", "overrides"] {
+            let mut m = sweep::load_freeman(args.file.as_deref())?;
+            match kind {
+                "baked" => {
+                    let values = skyrun::freeman_values(&base)
+                        .into_iter()
+                        .filter(|(n, _)| varied.iter().any(|v| v == n))
+                        .map(|(n, v)| (n.to_string(), uniform_text(v)))
+                        .collect();
+                    m.respecialize(values, &[])?;
+                }
+                "overrides" => m.respecialize(Default::default(), &varied)?,
+                _ => {}
+            }
+            let mat = material(&m, &base).map_err(|e| usage(e.to_string()))?;
+            let s = m.compile(&gpu)?.with_constants(constants(&m, &base));
+            modules.push((kind, s, mat));
+        }
         let base_truth = converged.params(&base);
         let truth = truths.iter().find(|(p, _)| *p == base_truth).or(truths.first()).ok_or(ExitCode::from(1))?;
         let cx = super::bench_skip::Context {
             gpu: &gpu,
-            shader: &shader,
+            shader: shaders[base_shader],
             name: shader_name.clone(),
+            modules: modules.iter().map(|(k, s, m)| (*k, s, m.as_slice())).collect(),
             views: &views,
             width,
             height,
@@ -396,6 +507,11 @@ fn bench(args: &BenchArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
         let rows = super::bench_skip::run(&cx, &args.skipping)?;
         println!("skipping (the shader's defaults; occluder ratio = time / time at 0 %, resolution = speed-up):");
         print!("{}", super::bench_skip::table(&rows));
+        println!(
+            "uniforms rows: {} read from the material block (generic), baked into constants (baked), as \
+             pipeline-overridable constants (overrides); ratio = speed-up over generic",
+            varied.join(", ")
+        );
         let path = args.out_dir.join("skipping.csv");
         super::write_file(&path, super::bench_skip::csv(&rows).as_bytes()).map_err(environment)?;
         println!("wrote    {}", path.display());

@@ -8,7 +8,12 @@
 //!   over full, and error against the full-resolution render and against the converged truth
 //!   (mean, p99 relative error and mean |Δ| after the preview's tone map);
 //! * the same resolutions for each `--skipping-shader` (at its own default uniforms; against
-//!   full resolution only: the converged truth is the Freeman sky's).
+//!   full resolution only: the converged truth is the Freeman sky's);
+//! * the module kinds (`uniforms` rows): the uniforms the sweep varies (or those named with
+//!   `--override`) read from the material block (`generic`), baked into constants (`baked`),
+//!   and as pipeline-overridable constants (`overrides`), each at the base values, with the
+//!   speed-up over generic and the error against the bench shader's full-resolution render (0
+//!   when bit-identical).
 //!
 //! Writes `skipping.csv` next to `bench.csv` and prints the table; the CSV columns of the sweep
 //! are untouched.
@@ -40,7 +45,7 @@ pub struct SkippingArgs {
 pub struct SkipRow {
     /// The shader's name.
     pub shader: String,
-    /// `occluder` or `resolution`.
+    /// `occluder`, `resolution` or `uniforms`.
     pub kind: &'static str,
     /// `0%`, `half/bilinear`, …
     pub variant: String,
@@ -64,6 +69,9 @@ pub struct Context<'a> {
     pub material: &'a [u8],
     pub truth: &'a [[f64; 4]],
     pub runs: u32,
+    /// The module kinds of the `uniforms` rows: (`generic` | `baked` | `overrides`, its shader
+    /// with the base values as pipeline constants, its material block).
+    pub modules: Vec<(&'static str, &'a SkyShader, &'a [u8])>,
 }
 
 /// A render setting of one shader.
@@ -164,6 +172,20 @@ pub fn run(cx: &Context<'_>, args: &SkippingArgs) -> Result<Vec<SkipRow>, ExitCo
             }
         }
     }
+    for (kind, shader, material) in &cx.modules {
+        variants.push((
+            cx.name.clone(),
+            "uniforms",
+            (*kind).to_string(),
+            Variant {
+                shader,
+                material,
+                occluder: None,
+                resolution: SkyResolution::Full,
+                filter: UpsampleFilter::Bilinear,
+            },
+        ));
+    }
     // Warm-up renders (pixels), then round-robin timing.
     let mut pixels = Vec::with_capacity(variants.len());
     for (_, _, _, v) in &variants {
@@ -181,7 +203,7 @@ pub fn run(cx: &Context<'_>, args: &SkippingArgs) -> Result<Vec<SkipRow>, ExitCo
         t.sort();
         let n = t.len();
         let median = (t[(n - 1) / 2] + t[n / 2]) / 2;
-        let (vs_full, vs_truth) = if *kind == "resolution" {
+        let (vs_full, vs_truth) = if *kind == "resolution" || *kind == "uniforms" {
             let full = variants
                 .iter()
                 .position(|(n2, k2, var2, _)| n2 == name && *k2 == "resolution" && var2 == "full")
@@ -240,11 +262,16 @@ pub fn table(rows: &[SkipRow]) -> String {
     out
 }
 
-/// A row's ratio against its baseline (same shader and kind, variant "0%" or "full"): for the
-/// occluder, time / time at 0 %; for a sky resolution, time at full / time (a speed-up).
+/// A row's ratio against its baseline (same shader and kind, variant "0%", "full" or
+/// "generic"): for the occluder, time / time at 0 %; for a sky resolution, time at full / time
+/// (a speed-up); for a module kind, time of the generic module / time (a speed-up).
 fn ratio(rows: &[SkipRow], r: &SkipRow) -> f64 {
     rows.iter()
-        .find(|b| b.shader == r.shader && b.kind == r.kind && (b.variant == "0%" || b.variant == "full"))
+        .find(|b| {
+            b.shader == r.shader
+                && b.kind == r.kind
+                && (b.variant == "0%" || b.variant == "full" || b.variant == "generic")
+        })
         .map(|b| if r.kind == "occluder" { ms(r.median) / ms(b.median) } else { ms(b.median) / ms(r.median) })
         .unwrap_or(f64::NAN)
 }

@@ -29,7 +29,8 @@ pub struct ConvertArgs {
     /// Emit a scalar uniform as a WGSL `override` (`@id(k)` for the k-th `--override`, its
     /// default the uniform's) instead of a member of the material block: one module serves many
     /// values, given at pipeline creation. The reflection's `overrides` lists them. In the `.spv`
-    /// each is a specialization constant (`OpSpecConstant`, `SpecId` k).
+    /// each is a specialization constant (`OpSpecConstant`, `SpecId` k). Adds to the scene
+    /// file's `overrides`.
     #[arg(long = "override", value_name = "NAME")]
     overrides: Vec<String>,
     /// Reversed Z: the vertex entry puts the sky at depth 0 (the far plane when near is 1; depth
@@ -87,12 +88,25 @@ pub fn run(args: &ConvertArgs) -> ExitCode {
         eprint!("{message}");
         return ExitCode::from(1);
     }
-    let baked: HashMap<String, String> = if args.bake_scene {
+    let overrides = super::scene::override_names(input.scene.as_ref(), &args.overrides);
+    // `--set` always bakes in `convert`; under --bake-scene the scene's uniforms do too.
+    if let Err(code) = super::scene::check_override_conflicts(&overrides, input.scene.as_ref(), |n| {
+        if sets.iter().any(|(s, _)| s == n) {
+            Some(format!("`--set {n}=…` bakes `{n}` into a constant"))
+        } else {
+            super::scene::bake_reason(n, input.scene.as_ref(), &sets, args.bake_scene)
+        }
+    }) {
+        return code;
+    }
+    let mut baked: HashMap<String, String> = if args.bake_scene {
         gdsky::scene::bake_values(shader, input.scene.as_ref(), &sets)
     } else {
         sets.into_iter().collect()
     };
-    let mut lowered = match gdsky_naga::lower_with_overrides(&front, &baked, &args.overrides) {
+    // Baking "every uniform at its default" leaves the overrides alone.
+    baked.retain(|name, _| !overrides.contains(name));
+    let mut lowered = match gdsky_naga::lower_with_overrides(&front, &baked, &overrides) {
         Ok(l) => l,
         Err(diags) => {
             eprint!("{}", render_human(&front.db, &diags, color));

@@ -2,8 +2,8 @@
 
 use super::scene::SkipArgs;
 use super::scene::{
-    SceneArgs, check_outputs, check_scene_uniforms, load_shader_baking, open_gpu, open_input, set_freeman, strip,
-    write_outputs,
+    SceneArgs, bake_reason, check_outputs, check_override_conflicts, check_scene_uniforms, load_shader_specialized,
+    open_gpu, open_input, override_names, set_freeman, strip, write_outputs,
 };
 use super::usage;
 use clap::{ArgMatches, Args, ValueEnum};
@@ -22,6 +22,12 @@ pub struct RenderArgs {
     /// constants; with no scene file, every uniform at its default.
     #[arg(long)]
     bake_scene: bool,
+    /// Emit a scalar uniform as a pipeline-overridable constant (WGSL `override`, as `convert
+    /// --override`) and render with its value (`--set`, the scene file's, else the default)
+    /// given at pipeline creation; the image is the generic module's. Adds to the scene file's
+    /// `overrides`. Repeatable.
+    #[arg(long = "override", value_name = "NAME")]
+    overrides: Vec<String>,
     /// The EXR to write: RGBA 32-bit float, scanline, row 0 at the top (replaced atomically; a
     /// symbolic link is written through to its target). Its directory must exist.
     #[arg(short = 'o', long = "out", value_name = "OUT.exr")]
@@ -57,7 +63,11 @@ fn render(args: &RenderArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
     let options = skip.options(occluder.as_ref());
     let started = Instant::now();
     let cli_sets = args.scene.overrides().map_err(usage)?;
-    let loaded = load_shader_baking(input.shader.as_deref(), |shader| {
+    let names = override_names(input.scene.as_ref(), &args.overrides);
+    check_override_conflicts(&names, input.scene.as_ref(), |n| {
+        bake_reason(n, input.scene.as_ref(), &cli_sets, args.bake_scene)
+    })?;
+    let loaded = load_shader_specialized(input.shader.as_deref(), input.scene.as_ref(), &names, |shader| {
         if args.bake_scene {
             gdsky::scene::bake_values(shader, input.scene.as_ref(), &cli_sets)
         } else {
@@ -76,8 +86,12 @@ fn render(args: &RenderArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
     }
     let convert_time = started.elapsed();
     let material = loaded.material(&overrides).map_err(|e| usage(format!("--set: {e}")))?;
+    let constants = loaded.constants(&overrides).map_err(usage)?;
+    if !names.is_empty() {
+        eprintln!("overrides: {}", names.join(", "));
+    }
     let gpu = open_gpu()?;
-    let shader = loaded.compile(&gpu)?;
+    let shader = loaded.compile(&gpu)?.with_constants(constants);
     let builtins = scene_args.builtins(input.scene.as_ref(), width, height);
     let mut rendered = Vec::with_capacity(views.len());
     let mut gpu_time = std::time::Duration::ZERO;

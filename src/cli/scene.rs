@@ -367,6 +367,9 @@ pub struct LoadedShader {
     pub wgsl: String,
     /// The uniforms baked into constants (`--bake-scene`), name → value.
     pub baked: HashMap<String, String>,
+    /// The uniforms emitted as pipeline-overridable constants (`--override`), the k-th with
+    /// `@id(k)`.
+    pub overrides: Vec<String>,
 }
 
 impl LoadedShader {
@@ -374,9 +377,36 @@ impl LoadedShader {
     /// baked uniforms (already constants) are left out.
     pub fn material(&self, overrides: &[(String, String)]) -> Result<Vec<u8>, skyrun::MaterialError> {
         let shader = self.front.shader.as_ref().ok_or(skyrun::MaterialError::NoSuchUniform(String::new()))?;
-        let kept: Vec<(String, String)> =
-            overrides.iter().filter(|(n, _)| !self.baked.contains_key(n)).cloned().collect();
+        // Uniforms that are overrides travel as pipeline constants ([`LoadedShader::constants`]),
+        // not in the block.
+        let kept: Vec<(String, String)> = overrides
+            .iter()
+            .filter(|(n, _)| !self.baked.contains_key(n) && !self.overrides.contains(n))
+            .cloned()
+            .collect();
         skyrun::material_with_defaults(shader, &self.lowered, &kept)
+    }
+
+    /// The pipeline constants of the overrides (`@id` as text → value) from `--set`-style pairs
+    /// (the last pair of a name counts), each override not set at the uniform's default, so
+    /// every override is listed. A value is checked as `--set` checks it.
+    pub fn constants(&self, sets: &[(String, String)]) -> Result<Vec<(String, f64)>, String> {
+        let Some(shader) = self.front.shader.as_ref() else {
+            return Ok(Vec::new());
+        };
+        let mut constants = Vec::with_capacity(self.overrides.len());
+        for (id, name) in self.overrides.iter().enumerate() {
+            let Some(u) = shader.uniforms.iter().find(|u| u.name == *name) else {
+                return Err(format!("the shader has no uniform `{name}` to override"));
+            };
+            let value = match sets.iter().rev().find(|(n, _)| n == name) {
+                Some((_, text)) => gdsky_naga::reflect::parse_value(&u.ty, text)
+                    .map_err(|why| format!("`--set {name}={text}`: {why}"))?,
+                None => u.default.clone().unwrap_or(gdsky::frontend::check::consteval::ConstValue::Int(0)),
+            };
+            constants.push((id.to_string(), constant_value(&value)));
+        }
+        Ok(constants)
     }
 
     /// The shader compiled on `gpu`, with Godot's sub-passes and default textures. Exit 1 when
@@ -391,6 +421,76 @@ impl LoadedShader {
                 ExitCode::from(1)
             })
     }
+}
+
+/// A scalar constant as a pipeline constant: wgpu takes every override's value as an f64 and
+/// converts it to the override's type, exactly for every f32, i32 and u32 (an f32 parsed from
+/// `--set` is first rounded to f32, as the material block would hold it, so the override and
+/// the generic module see the same bits). A bool is 0 or 1 (its override is a u32).
+pub fn constant_value(v: &gdsky::frontend::check::consteval::ConstValue) -> f64 {
+    use gdsky::frontend::check::consteval::ConstValue;
+    match v {
+        ConstValue::Float(f) => f64::from(*f as f32),
+        ConstValue::Int(i) => *i as f64,
+        ConstValue::UInt(u) => *u as f64,
+        ConstValue::Bool(b) => f64::from(u8::from(*b)),
+        ConstValue::Composite(_) => 0.0,
+    }
+}
+
+/// The uniforms to emit as overrides: the scene file's `overrides`, then each `--override` not
+/// already listed (the flags add to the file).
+pub fn override_names(scene: Option<&SceneFile>, flags: &[String]) -> Vec<String> {
+    let mut names = scene.map(SceneFile::override_names).unwrap_or_default();
+    for f in flags {
+        if !names.contains(f) {
+            names.push(f.clone());
+        }
+    }
+    names
+}
+
+/// Why `name` is baked on purpose: under `--bake-scene`, a `--set` of it or the scene file's
+/// `[uniforms]` fixing it. `None` when it is not (baking "every uniform at its default", without
+/// a scene file, leaves overrides alone).
+pub fn bake_reason(
+    name: &str,
+    scene: Option<&SceneFile>,
+    cli_sets: &[(String, String)],
+    bake_scene: bool,
+) -> Option<String> {
+    if !bake_scene {
+        return None;
+    }
+    if cli_sets.iter().any(|(n, _)| n == name) {
+        return Some(format!("`--set {name}=… --bake-scene` bakes `{name}` into a constant"));
+    }
+    if scene.is_some_and(|s| s.uniforms.iter().any(|u| u.name == name)) {
+        return Some(format!("`--bake-scene` bakes the scene's `[uniforms]`, which fix `{name}`"));
+    }
+    None
+}
+
+/// Refuses a uniform that is both an override and baked on purpose (`reason`, see
+/// [`bake_reason`]): a uniform is a constant in the module or a pipeline constant, not both.
+/// Exit 1 saying which; located in the scene file when its `overrides` lists the name.
+pub fn check_override_conflicts(
+    overrides: &[String],
+    scene: Option<&SceneFile>,
+    reason: impl Fn(&str) -> Option<String>,
+) -> Result<(), ExitCode> {
+    for name in overrides {
+        let Some(why) = reason(name) else { continue };
+        let message = format!("`{name}` cannot be an override and baked: {why}; drop `--override {name}` or the bake");
+        match scene.filter(|s| s.overrides.iter().any(|o| o.name == *name)) {
+            Some(scene) => {
+                eprint!("{}", scene.override_error(name, &message));
+                return Err(ExitCode::from(1));
+            }
+            None => return Err(super::usage(message)),
+        }
+    }
+    Ok(())
 }
 
 /// Whether the flag `id` was given on the command line (not a default, not absent).
@@ -452,12 +552,47 @@ pub fn load_shader(file: Option<&Path>) -> Result<LoadedShader, ExitCode> {
     load_shader_baking(file, |_| HashMap::new())
 }
 
+/// [`load_shader_baking`] with `overrides` emitted as pipeline-overridable constants (taken out
+/// of what `bake` picks; the caller has refused a uniform baked on purpose, see
+/// [`check_override_conflicts`]). The scene file's uniforms and overrides are checked first, so
+/// a wrong name is reported located in the file.
+pub fn load_shader_specialized(
+    file: Option<&Path>,
+    scene: Option<&SceneFile>,
+    overrides: &[String],
+    bake: impl FnOnce(&gdsky::CheckedShader) -> HashMap<String, String>,
+) -> Result<LoadedShader, ExitCode> {
+    let front = check_front(file)?;
+    let Some(shader) = front.shader.as_ref() else {
+        return Err(ExitCode::from(1));
+    };
+    if let Some(scene) = scene {
+        scene.check_uniforms(shader).map_err(|m| {
+            eprint!("{m}");
+            ExitCode::from(1)
+        })?;
+    }
+    let mut baked = bake(shader);
+    baked.retain(|name, _| !overrides.contains(name));
+    let (lowered, wgsl) = lower_and_emit(&front, &baked, overrides)?;
+    Ok(LoadedShader { front, lowered, wgsl, baked, overrides: overrides.to_vec() })
+}
+
 /// [`load_shader`], baking the uniforms `bake` picks from the checked shader (name → value in
 /// `--set` syntax) into constants; [`LoadedShader::baked`] lists them.
 pub fn load_shader_baking(
     file: Option<&Path>,
     bake: impl FnOnce(&gdsky::CheckedShader) -> HashMap<String, String>,
 ) -> Result<LoadedShader, ExitCode> {
+    let front = check_front(file)?;
+    let baked = front.shader.as_ref().map(bake).unwrap_or_default();
+    let (lowered, wgsl) = lower_and_emit(&front, &baked, &[])?;
+    Ok(LoadedShader { front, lowered, wgsl, baked, overrides: Vec::new() })
+}
+
+/// Reads and checks `file` (the bundled Freeman sky without one), printing its diagnostics.
+/// Exit 1 when it is invalid, 2 when it cannot be read.
+fn check_front(file: Option<&Path>) -> Result<gdsky::FrontendOutput, ExitCode> {
     let color = std::io::stderr().is_terminal() && std::env::var_os("NO_COLOR").is_none();
     let front = match file {
         Some(path) => gdsky::check_file(path).map_err(|err| {
@@ -472,19 +607,18 @@ pub fn load_shader_baking(
     if front.shader.is_none() {
         return Err(ExitCode::from(1));
     }
-    let baked = front.shader.as_ref().map(bake).unwrap_or_default();
-    let (lowered, wgsl) = lower_and_emit(&front, &baked)?;
-    Ok(LoadedShader { front, lowered, wgsl, baked })
+    Ok(front)
 }
 
-/// Lowers a checked shader with `baked` uniforms as constants and emits its WGSL; diagnostics
-/// printed, exit 1.
+/// Lowers a checked shader with `baked` uniforms as constants and `overrides` as
+/// pipeline-overridable constants, and emits its WGSL; diagnostics printed, exit 1.
 fn lower_and_emit(
     front: &gdsky::FrontendOutput,
     baked: &HashMap<String, String>,
+    overrides: &[String],
 ) -> Result<(gdsky_naga::Lowered, String), ExitCode> {
     let color = std::io::stderr().is_terminal() && std::env::var_os("NO_COLOR").is_none();
-    let lowered = gdsky_naga::lower_with(front, baked).map_err(|diags| {
+    let lowered = gdsky_naga::lower_with_overrides(front, baked, overrides).map_err(|diags| {
         eprint!("{}", render_human(&front.db, &diags, color));
         ExitCode::from(1)
     })?;
@@ -497,10 +631,11 @@ fn lower_and_emit(
 
 impl LoadedShader {
     /// Lowers the shader again with `baked` uniforms as constants (`--bake-scene` of `bench`,
-    /// after the Freeman-compatibility check). Exit 1 when a value does not fit.
-    pub fn rebake(&mut self, baked: HashMap<String, String>) -> Result<(), ExitCode> {
-        let (lowered, wgsl) = lower_and_emit(&self.front, &baked)?;
-        (self.lowered, self.wgsl, self.baked) = (lowered, wgsl, baked);
+    /// after the Freeman-compatibility check) and `overrides` as pipeline-overridable
+    /// constants. Exit 1 when a value does not fit or an override is not a scalar uniform.
+    pub fn respecialize(&mut self, baked: HashMap<String, String>, overrides: &[String]) -> Result<(), ExitCode> {
+        let (lowered, wgsl) = lower_and_emit(&self.front, &baked, overrides)?;
+        (self.lowered, self.wgsl, self.baked, self.overrides) = (lowered, wgsl, baked, overrides.to_vec());
         Ok(())
     }
 }
