@@ -224,3 +224,91 @@ fn uniform_loads_are_at_function_entry() {
         assert!(at < first_loop, "{load} before the loop:\n{body}");
     }
 }
+
+/// The `let _eN = NAME;` loads of the variable `name` in `w`.
+fn loads_of(w: &str, name: &str) -> usize {
+    w.lines().filter(|l| l.trim_start().starts_with("let ") && l.trim_end().ends_with(&format!(" = {name};"))).count()
+}
+
+#[test]
+fn a_local_written_then_read_is_forwarded_and_its_variable_goes() {
+    // `c` is written, read (whole and one component), across an `if` that does not write it:
+    // every read is the value stored, and the variable is gone with its stores.
+    let w = wgsl(&front(
+        "shader_type sky;\nvoid sky() { vec3 c = EYEDIR; c = c * 2.0; float h = c.y; \
+         if (EYEDIR.z > 0.5) { COLOR = vec3(h); } c = c + vec3(h); COLOR += c; }\n",
+    ));
+    let body = sky_body(&w);
+    assert!(!body.contains("var c"), "{body}");
+    assert_eq!(loads_of(body, "c"), 0, "{body}");
+    assert!(!body.contains("c.y"), "{body}");
+}
+
+#[test]
+fn a_store_nothing_reads_is_removed() {
+    // `t` is written before and in a loop and never read: its stores, the variable and the
+    // `sin` only they used are gone; the loop stays.
+    let w = wgsl(&front(
+        "shader_type sky;\nvoid sky() { float t = EYEDIR.x; t = sin(EYEDIR.y); \
+         for (int i = 0; i < 3; i++) { t = cos(EYEDIR.z * float(i)); } COLOR = vec3(1.0); }\n",
+    ));
+    let body = sky_body(&w);
+    assert!(!body.contains("var t") && !body.contains("t = "), "{body}");
+    assert!(!body.contains("sin(") && !body.contains("cos("), "{body}");
+    assert!(body.contains("loop {"), "{body}");
+}
+
+#[test]
+fn a_write_in_a_loop_is_not_forwarded() {
+    // Each iteration reads what the last one wrote, and the read after the loop the last write.
+    let w = wgsl(&front(
+        "shader_type sky;\nvoid sky() { float s = EYEDIR.x; for (int i = 0; i < 4; i++) { s = s * EYEDIR.y; } \
+         COLOR = vec3(s); }\n",
+    ));
+    let body = sky_body(&w);
+    assert!(body.contains("var s"), "{body}");
+    let in_loop = &body[body.find("loop {").expect("a loop")..];
+    assert!(loads_of(in_loop, "s") >= 2, "one load in the loop, one after it:\n{body}");
+}
+
+#[test]
+fn a_write_through_an_inout_argument_is_not_forwarded() {
+    // After the call, the variable holds what `bump` wrote, not what was stored before it.
+    let w = wgsl(&front(
+        "shader_type sky;\nvoid bump(inout float x) { x = x * 2.0; }\n\
+         void twice(float a, out float y) { y = a * 2.0; }\n\
+         void sky() { float v = EYEDIR.x; bump(v); float o = EYEDIR.z; twice(EYEDIR.y, o); COLOR = vec3(v, o, 0.0); }\n",
+    ));
+    let body = sky_body(&w);
+    for call in ["bump(", "twice("] {
+        let at = body.find(call).unwrap_or_else(|| panic!("{call} in:\n{body}"));
+        let arg = at + body[at..].find("(&").expect("a pointer argument") + 2;
+        let name = body[arg..].split(')').next().expect("an argument");
+        assert!(loads_of(&body[at..], name) >= 1, "`{name}` is loaded after the call:\n{body}");
+    }
+}
+
+#[test]
+fn a_write_in_one_branch_or_of_a_constant_is_not_forwarded() {
+    // After the `if`, `v` is either value: it is loaded.
+    let w = wgsl(&front(
+        "shader_type sky;\nvoid sky() { float v = EYEDIR.x; if (EYEDIR.y > 0.0) { v = EYEDIR.z; } COLOR = vec3(v); }\n",
+    ));
+    let body = sky_body(&w);
+    assert!(body.contains("var v"), "{body}");
+    let after = &body[body.rfind('}').expect("the if's end")..];
+    assert_eq!(loads_of(after, "v"), 1, "{body}");
+    // A constant stays behind its variable: forwarded, `k * 10.0` would be a WGSL constant
+    // expression, evaluated (and overflowing) when the shader is created.
+    let w =
+        wgsl(&front("shader_type sky;\nvoid sky() { float k = 1e38; k = k * 10.0; COLOR = vec3(k * EYEDIR.x); }\n"));
+    let body = sky_body(&w);
+    assert!(body.contains("var k") && loads_of(body, "k") >= 1, "{body}");
+    // So does a value computed from uniforms only: `--override` makes it an override
+    // expression, evaluated when the pipeline is created.
+    let w = wgsl(&front(
+        "shader_type sky;\nuniform float u = 2.0;\nvoid sky() { float t = u * 3.0; t = t * EYEDIR.x; COLOR = vec3(t); }\n",
+    ));
+    let body = sky_body(&w);
+    assert!(body.contains("var t") && loads_of(body, "t") >= 1, "{body}");
+}

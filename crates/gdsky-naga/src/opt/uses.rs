@@ -61,7 +61,7 @@ pub(crate) fn operands(e: &E) -> Option<Vec<H>> {
 
 /// Marks the expressions `block`'s statements use directly; false on a statement kind gdsky
 /// never writes.
-fn roots(block: &Block, used: &mut Vec<H>) -> bool {
+pub(crate) fn roots(block: &Block, used: &mut Vec<H>) -> bool {
     for s in block.iter() {
         match s {
             S::Emit(_) | S::Break | S::Continue | S::Kill | S::ControlBarrier(_) | S::MemoryBarrier(_) => {}
