@@ -102,8 +102,10 @@
 #![warn(missing_docs)]
 
 pub mod converged;
+mod fast_impl;
 mod params;
 mod precision;
+pub mod truth;
 
 pub use params::{FreemanParams, Projection, Scene, UniformMut, cube_face_basis};
 
@@ -116,6 +118,18 @@ pub mod f32 {
 /// algorithm with (almost) no rounding error.
 pub mod f64 {
     crate::precision::freeman_sky!(f64, DVec2, DVec3, DMat3);
+}
+
+/// `shaders/freeman_fast.gdshader` in Rust: the same physical model, other quadratures.
+pub mod fast {
+    /// The fast sky in single precision: what a GPU computes.
+    pub mod f32 {
+        crate::fast_impl::freeman_fast!(f32, Vec3);
+    }
+    /// The fast sky in double precision.
+    pub mod f64 {
+        crate::fast_impl::freeman_fast!(f64, DVec3);
+    }
 }
 
 #[cfg(test)]
