@@ -10,8 +10,9 @@ use crate::{Lowered, MATERIAL_GROUP};
 use gdshader::CheckedShader;
 use gdshader::check::consteval::ConstValue;
 use gdshader::check::types::{Scalar, Type};
+use naga::Handle;
 use serde_json::{Value, json};
-use std::collections::HashMap;
+use std::collections::{BTreeSet, HashMap, HashSet};
 
 /// A value in `--set` syntax, as [`parse_value`] reads it back (`1.5`, `24`, `true`,
 /// `0.1,0.2,0.3`).
@@ -289,6 +290,55 @@ fn overrides(shader: &CheckedShader, lowered: &Lowered) -> Vec<Value> {
             json!({ "name": o.name, "id": o.id, "type": ty, "default": default })
         })
         .collect()
+}
+
+/// The uniforms the module reads: those whose block member (material or global) some function
+/// or entry point loads, and the overrides some function refers to. A uniform the shader
+/// declares but never reads is left out: the optimizing stage [`crate::lower`] runs drops the
+/// functions nothing calls and the values nothing uses, so no load of its member remains. Baked
+/// uniforms are constants and never listed. A tool varying a uniform (a benchmark's sweep) uses
+/// this to skip one whose value cannot change the image.
+pub fn uniforms_read(lowered: &Lowered) -> BTreeSet<String> {
+    use naga::Expression as E;
+    let module = &lowered.module;
+    // (block, Some(member)) for a member read, (block, None) when the whole block is (a load of
+    // the block itself, which gdsky never writes, counts every member: a conservative answer).
+    let mut members: HashSet<(Handle<naga::GlobalVariable>, Option<u32>)> = HashSet::new();
+    let mut overrides: HashSet<Handle<naga::Override>> = HashSet::new();
+    let functions = module.functions.iter().map(|(_, f)| f).chain(module.entry_points.iter().map(|ep| &ep.function));
+    for f in functions {
+        let global = |h: Handle<E>| match f.expressions[h] {
+            E::GlobalVariable(g) => Some(g),
+            _ => None,
+        };
+        for (_, e) in f.expressions.iter() {
+            match *e {
+                E::AccessIndex { base, index } => {
+                    if let Some(g) = global(base) {
+                        members.insert((g, Some(index)));
+                    }
+                }
+                E::Override(o) => {
+                    overrides.insert(o);
+                }
+                _ => {
+                    // Any other use of a block's pointer (unknown kinds included) reads it all.
+                    let operands = crate::opt::operands(e).unwrap_or_default();
+                    for g in operands.into_iter().filter_map(global) {
+                        members.insert((g, None));
+                    }
+                }
+            }
+        }
+    }
+    let mut read: BTreeSet<String> = lowered
+        .uniforms
+        .iter()
+        .filter(|(_, slot)| members.contains(&(slot.block, Some(slot.member))) || members.contains(&(slot.block, None)))
+        .map(|(name, _)| name.clone())
+        .collect();
+    read.extend(overrides.into_iter().filter_map(|o| module.overrides[o].name.clone()));
+    read
 }
 
 #[cfg(test)]
