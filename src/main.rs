@@ -104,6 +104,15 @@ enum Command {
     /// every frame (measured in the same run). Exit status: 0 written, 1 the scene, the shader
     /// or a flag is invalid, 2 no Vulkan adapter or a file cannot be read or written.
     Animate(cli::animate::AnimateArgs),
+    /// Bake the transmittance table of shaders/freeman_lut.gdshader from the material's uniform
+    /// values (f64, Bruneton's axes).
+    ///
+    /// The table holds per-layer optical depths, so only the scale heights, the ozone centre and
+    /// width, the planet radius and the atmosphere height are baked in; the wavelengths, Mie
+    /// scattering and albedo stay live uniforms. render, bench and stress bake it themselves when
+    /// a shader declares `transmittance_table` and no --texture gives it. Exit status: 0 written,
+    /// 1 a flag or value is invalid, 2 the output cannot be written.
+    BakeLut(cli::bake_lut::BakeLutArgs),
 }
 
 fn main() -> ExitCode {
@@ -132,5 +141,6 @@ fn main() -> ExitCode {
         Command::Bench(args) => cli::bench::run(&args, &sub),
         Command::Stress(args) => cli::stress::run(&args),
         Command::Animate(args) => cli::animate::run(&args, &sub),
+        Command::BakeLut(args) => cli::bake_lut::run(&args),
     }
 }

@@ -1,6 +1,7 @@
 //! One module per subcommand, and what they share.
 
 pub mod animate;
+pub mod bake_lut;
 pub mod bench;
 pub mod bench_skip;
 pub mod check;

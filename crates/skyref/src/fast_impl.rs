@@ -263,8 +263,76 @@ macro_rules! freeman_fast {
                 )
             }
 
-            /// `sky()`: the colour for one view direction.
+            /// The transmittance toward the sun read from a baked table (as
+            /// `freeman_lut.gdshader` reads it): Bruneton's (x_μ, x_r) of the point, four texels
+            /// blended bilinearly, then the layers' coefficients applied. Black in the planet's
+            /// shadow.
+            pub fn table_transmittance(&self, table: &crate::lut::TransmittanceTable, b: $T, c: $T, h: $T) -> $V3 {
+                if b < 0.0 && b * b - c >= 0.0 {
+                    return $V3::ZERO;
+                }
+                let shell = self.atmosphere_height * (2.0 * self.planet_radius + self.atmosphere_height);
+                let horizon = shell.sqrt();
+                let rho = c.abs().sqrt();
+                let to_top = ray_sphere_intersection(b, c - shell).1.max(0.0);
+                let d_min = self.atmosphere_height - h;
+                let d_max = rho + horizon;
+                let x_mu = ((to_top - d_min) / (d_max - d_min).max(MIN_LENGTH)).clamp(0.0, 1.0);
+                let x_r = (rho / horizon.max(MIN_LENGTH)).clamp(0.0, 1.0);
+                let (w, hgt) = (table.width as $T, table.height as $T);
+                let fx = x_mu * (w - 1.0);
+                let fy = x_r * (hgt - 1.0);
+                let ix = (fx.floor() as i64).clamp(0, table.width as i64 - 2);
+                let iy = (fy.floor() as i64).clamp(0, table.height as i64 - 2);
+                let (ax, ay) = (fx - ix as $T, fy - iy as $T);
+                let texel = |x: i64, y: i64| -> $V3 {
+                    let t = table.texels[(y * table.width as i64 + x) as usize];
+                    $V3::new(t[0] as $T, t[1] as $T, t[2] as $T)
+                };
+                let lerp = |a: $V3, b: $V3, w: $T| a * (1.0 - w) + b * w;
+                let depth = lerp(
+                    lerp(texel(ix, iy), texel(ix + 1, iy), ax),
+                    lerp(texel(ix, iy + 1), texel(ix + 1, iy + 1), ax),
+                    ay,
+                );
+                exp3(
+                    -(self.beta_rayleigh * depth.x
+                        + $V3::splat(self.mie_extinction * depth.y)
+                        + self.ozone_extinction * depth.z),
+                )
+            }
+
+            /// `sky()` of `freeman_fast`: the colour for one view direction.
             pub fn sky(&self, light0_enabled: bool, sun_direction: $V3, position_y: $T, eyedir: $V3) -> $V3 {
+                self.sky_with(light0_enabled, sun_direction, position_y, eyedir, |b, c, h| {
+                    self.sun_transmittance(b, c, h)
+                })
+            }
+
+            /// `sky()` of `freeman_lut` with its table.
+            pub fn sky_lut(
+                &self,
+                table: &crate::lut::TransmittanceTable,
+                light0_enabled: bool,
+                sun_direction: $V3,
+                position_y: $T,
+                eyedir: $V3,
+            ) -> $V3 {
+                self.sky_with(light0_enabled, sun_direction, position_y, eyedir, |b, c, h| {
+                    self.table_transmittance(table, b, c, h)
+                })
+            }
+
+            /// The sky shared by both variants; `lit(b, c, h)` is the transmittance toward the
+            /// sun from a point (zero in the planet's shadow).
+            fn sky_with(
+                &self,
+                light0_enabled: bool,
+                sun_direction: $V3,
+                position_y: $T,
+                eyedir: $V3,
+                lit: impl Fn($T, $T, $T) -> $V3,
+            ) -> $V3 {
                 if !light0_enabled {
                     return $V3::ZERO;
                 }
@@ -318,7 +386,7 @@ macro_rules! freeman_fast {
                 let mut rho_start = ((-altitude * inverse_scales.0).exp(), (-altitude * inverse_scales.1).exp());
                 let mut radiance = $V3::ZERO;
                 let mut view_start = $V3::ONE;
-                let mut lit_start = self.sun_transmittance(sun_b, ray_c, altitude);
+                let mut lit_start = lit(sun_b, ray_c, altitude);
                 for i in 0..samples {
                     // The last step ends exactly at the end of the ray, whatever the rounding of
                     // the progression.
@@ -367,7 +435,7 @@ macro_rules! freeman_fast {
                         average(view_start.z, view_end.z, step_depth.z),
                     );
                     let sample_b = sun_b + t_end * cos_theta;
-                    let lit_end = self.sun_transmittance(sample_b, c_end, h_end);
+                    let lit_end = lit(sample_b, c_end, h_end);
                     // The sun's transmittance varies slowly over a step: linear between the
                     // step's ends, weighted by each layer's density (its centroid).
                     // GLSL's mix(a, b, w) = a·(1 − w) + b·w.
@@ -414,10 +482,37 @@ macro_rules! freeman_fast {
                 let ground_point = $V3::new(0.0, altitude, 0.0) + eyedir * distance;
                 let normal = (ground_point + $V3::new(0.0, radius, 0.0)).normalize();
                 let direct = normal.dot(sun_direction).max(0.0);
-                let sun = if direct > 0.0 { self.sun_transmittance(radius * direct, 0.0, 0.0) } else { $V3::ZERO };
+                let sun = if direct > 0.0 { lit(radius * direct, 0.0, 0.0) } else { $V3::ZERO };
                 let albedo = self.ground_color * (sun * (direct * self.sun_intensity) + ambient * 75.0) / PI;
                 radiance + albedo * end_transmittance
             }
+        }
+
+        /// Renders a `width`×`height` image of the table variant (`freeman_lut`) with `table`,
+        /// pixels mapped as [`crate::f32::render`] maps them; rows in parallel.
+        pub fn render_lut(
+            params: &FreemanParams,
+            table: &crate::lut::TransmittanceTable,
+            scene: &Scene,
+            projection: Projection,
+            width: u32,
+            height: u32,
+        ) -> Vec<[$T; 4]> {
+            if width == 0 || height == 0 || table.width < 2 || table.height < 2 {
+                return Vec::new();
+            }
+            let uniforms = Uniforms::from(params);
+            let sun = v3(scene.light0_direction());
+            let w = width as usize;
+            let mut out = vec![[0.0; 4]; w * height as usize];
+            out.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+                for (x, px) in row.iter_mut().enumerate() {
+                    let d = crate::$T::eyedir(scene, projection, x as u32, y as u32, width, height);
+                    let c = uniforms.sky_lut(table, scene.light_enabled, sun, s(scene.position.y), d);
+                    *px = [c.x, c.y, c.z, 0.0];
+                }
+            });
+            out
         }
 
         /// Renders a `width`×`height` image of the fast sky, pixels mapped as

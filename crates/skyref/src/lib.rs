@@ -105,6 +105,7 @@ pub mod converged;
 mod fast_impl;
 mod params;
 mod precision;
+pub mod lut;
 pub mod truth;
 
 pub use params::{FreemanParams, Projection, Scene, UniformMut, cube_face_basis};

@@ -479,3 +479,18 @@ pub fn convergence_check(
     let b = render(params, scene, Projection::Panorama, width, height, &truth.doubled());
     summarize(&mut relative_changes(&a, &b, REL_FLOOR))
 }
+
+/// Optical depth (Rayleigh, Mie, ozone, in metres of each layer at unit density) from radius
+/// `r` with cosine `mu` to the local zenith, to the top of the atmosphere, for the layers of
+/// `params`, integrated as the truth integrates sun rays (graded Gauss–Legendre panels split at
+/// the tangent point and the ozone kinks). Rays that meet the ground are integrated as if the
+/// planet were transparent; callers use it only above the horizon.
+pub fn optical_depth_to_top(params: &FreemanParams, r: f64, mu: f64, panels: u32) -> DVec3 {
+    let model = Model::new(params);
+    let mu = mu.clamp(-1.0, 1.0);
+    let origin = DVec3::new(0.0, r, 0.0);
+    let direction = DVec3::new((1.0 - mu * mu).sqrt(), mu, 0.0);
+    let path = Path { origin, direction };
+    let length = path.sphere_crossings(model.radius + model.height).get(1).copied().unwrap_or(0.0).max(0.0);
+    optical_depth(&model, &path, 0.0, length, panels)
+}
