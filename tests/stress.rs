@@ -1,8 +1,9 @@
 //! `gdsky stress --quick` through the binary, as CI runs it: for the bundled Freeman sky and,
 //! when it exists, `shaders/freeman_stable.gdshader`. Asserts from the report's `summary:` line:
 //! no NaN/Inf at default uniforms for either shader, and for the stable shader the horizon bound
-//! of issue #5 (0.5 m, sun on the horizon: p99.9 ≤ 1e-3 and worst ≤ 1/10 of the original's).
-//! No timing. Needs a Vulkan adapter (lavapipe on a machine without a GPU).
+//! of issue #5 (0.5 m, sun on the horizon: p99.9 ≤ 1e-3 and worst ≤ 1/10 of the original's);
+//! `shaders/freeman_fast.gdshader` against its own twin, `skyref::fast` (`--reference fast`, the
+//! default its file name picks): no NaN/Inf either. No timing. Needs a Vulkan adapter (lavapipe on a machine without a GPU).
 
 mod common;
 
@@ -49,9 +50,15 @@ fn summary(o: &Output) -> Summary {
 /// Runs `stress --quick` on FILE (the bundled sky for `None`) and checks what both shaders must
 /// satisfy: exit 0, a report, no NaN/Inf at default uniforms.
 fn quick(file: Option<&Path>, name: &str) -> Summary {
+    quick_with(file, name, &[]).0
+}
+
+/// [`quick`] with `extra` flags; also the output.
+fn quick_with(file: Option<&Path>, name: &str, extra: &[&str]) -> (Summary, Output) {
     let dir = scratch(name);
     let out = dir.to_str().expect("utf-8 path");
     let mut args = vec!["stress", "--quick", "-o", out];
+    args.extend_from_slice(extra);
     let file_arg;
     if let Some(file) = file {
         file_arg = file.to_str().expect("utf-8 path").to_string();
@@ -67,7 +74,7 @@ fn quick(file: Option<&Path>, name: &str) -> Summary {
     for file in ["stress.csv", "grid.png"] {
         assert!(dir.join(file).is_file(), "{file} written");
     }
-    s
+    (s, o)
 }
 
 #[test]
@@ -101,4 +108,17 @@ fn stress_refuses_a_shader_that_is_not_freeman_compatible() {
     assert_eq!(o.status.code(), Some(1), "{}", text(&o));
     assert!(text(&o).contains("not Freeman-compatible"), "{}", text(&o));
     assert!(!dir.join("stress.md").exists());
+}
+
+#[test]
+fn quick_stress_fast_against_its_own_reference() {
+    let fast = Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders/freeman_fast.gdshader");
+    let (s, o) = quick_with(Some(&fast), "fast", &["--reference", "fast"]);
+    assert!(text(&o).contains("reference: fast (skyref::fast, --reference)"), "{}", text(&o));
+    assert!(s.horizon_worst.is_finite() && s.horizon_p999.is_finite(), "{s:?}");
+    // Without the flag the file name picks the same reference.
+    let dir = scratch("fast_default");
+    let o = gdsky(&["stress", "--quick", "-o", dir.to_str().unwrap(), fast.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(text(&o).contains("reference: fast (skyref::fast, the default for this file name)"), "{}", text(&o));
 }

@@ -4,10 +4,17 @@
 //! direction, and a 4°-high camera view of the horizon toward the sun's azimuth, which samples
 //! the grazing rays densely) and each uniform at the ends of its `hint_range`, one at a time at
 //! a few representative scenes. Each case is rendered three ways with the same sample counts:
-//! FILE on the adapter in f32, skyref in f32 on the CPU, and skyref in f64 on the CPU, the
-//! truth. GPU f32 against f64 is the shader's error; skyref f32 against f64 is the error of the
-//! original Freeman arithmetic in f32 (whatever FILE is), so the two columns tell a conversion
-//! problem (GPU ≠ skyref f32) from an f32 problem (both far from f64).
+//! FILE on the adapter in f32, the reference in f32 on the CPU, and the reference in f64 on the
+//! CPU, the truth. GPU f32 against f64 is the shader's error; reference f32 against f64 is the
+//! error of the reference's arithmetic in f32, so the two columns tell a conversion problem
+//! (GPU ≠ reference f32) from an f32 problem (both far from f64).
+//!
+//! The reference is the Rust twin of FILE's algorithm (`--reference`, [`Reference`]): skyref's
+//! line-for-line port of the original Freeman sky (`original`; for it and for shaders that keep
+//! its quadrature, such as `freeman_stable`), or `skyref::fast` for `freeman_fast`, whose
+//! quadratures differ (against the original's f64 its error would be the quadrature change, not
+//! its precision). The default follows the file name: `fast` for a stem starting with
+//! `freeman_fast`, else `original`.
 //!
 //! Writes `stress.md` (the report), `stress.csv` (every case), `grid.png` (the worst error per
 //! altitude × sun elevation at default uniforms) and per-pixel heatmaps of the worst cases, and
@@ -17,7 +24,7 @@
 use super::scene::{BUNDLED_NAME, open_gpu};
 use super::sweep::{self, ErrorStats, sci};
 use super::{environment, usage};
-use clap::Args;
+use clap::{Args, ValueEnum};
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use skyref::{FreemanParams, Projection, Scene};
@@ -66,6 +73,63 @@ pub struct StressArgs {
     /// before any work).
     #[arg(short = 'o', long = "out-dir", value_name = "DIR", default_value = "out/stress")]
     out_dir: PathBuf,
+    /// The CPU reference (f32 and f64) FILE is measured against: the Rust twin of its
+    /// algorithm [default: `fast` when FILE's stem starts with `freeman_fast`, else `original`].
+    #[arg(long, value_enum)]
+    reference: Option<Reference>,
+}
+
+/// A family of CPU references: skyref's Rust twin of a shader's algorithm, in f32 and f64.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Reference {
+    /// skyref::f32 / skyref::f64: the original Freeman sky line for line (also the reference of
+    /// shaders that keep its quadrature, such as freeman_stable).
+    Original,
+    /// skyref::fast::f32 / skyref::fast::f64: shaders/freeman_fast.gdshader's quadratures.
+    Fast,
+}
+
+/// What a [`Reference`] is: its name in the report and its renderers.
+struct Family {
+    /// How the report names it (`skyref f32`, `skyref::fast f32` …, without the precision).
+    label: &'static str,
+    /// What its f32 arithmetic is, for the report's column titles.
+    arithmetic: &'static str,
+    render32: fn(&FreemanParams, &Scene, Projection, u32, u32) -> Vec<[f32; 4]>,
+    render64: fn(&FreemanParams, &Scene, Projection, u32, u32) -> Vec<[f64; 4]>,
+}
+
+impl Reference {
+    /// The family's name and renderers: one arm per family, so a new family is one arm here
+    /// (and a variant above).
+    fn family(self) -> Family {
+        match self {
+            Reference::Original => Family {
+                label: "skyref",
+                arithmetic: "the original Freeman arithmetic",
+                render32: skyref::f32::render,
+                render64: skyref::f64::render,
+            },
+            Reference::Fast => Family {
+                label: "skyref::fast",
+                arithmetic: "freeman_fast's arithmetic",
+                render32: skyref::fast::f32::render,
+                render64: skyref::fast::f64::render,
+            },
+        }
+    }
+
+    /// The default for a shader file: the family whose shader's stem FILE's starts with
+    /// (`freeman_fast…` → fast), else the original.
+    fn for_file(file: Option<&Path>) -> Reference {
+        let stem = file.and_then(Path::file_stem).and_then(|s| s.to_str()).unwrap_or_default();
+        if stem.starts_with("freeman_fast") { Reference::Fast } else { Reference::Original }
+    }
+
+    /// Its `--reference` value.
+    fn name(self) -> String {
+        self.to_possible_value().map(|v| v.get_name().to_string()).unwrap_or_default()
+    }
 }
 
 /// Which view a case renders.
@@ -228,6 +292,10 @@ fn stress(args: &StressArgs) -> Result<ExitCode, ExitCode> {
     let shader_info = loaded.front.shader.as_ref().ok_or(ExitCode::from(1))?;
     let name = input.shader.as_ref().map(|f| f.display().to_string()).unwrap_or(BUNDLED_NAME.into());
     let ranges = hint_ranges(shader_info);
+    let reference = args.reference.unwrap_or_else(|| Reference::for_file(input.shader.as_deref()));
+    let family = reference.family();
+    let chosen = if args.reference.is_some() { "--reference" } else { "the default for this file name" };
+    eprintln!("reference: {} ({}, {chosen})", reference.name(), family.label);
     let cases = cases(args.quick, &ranges);
     for case in &cases {
         case.params(&base).map_err(|e| usage(format!("{name}: hint_range end not usable: {e}")))?;
@@ -248,8 +316,8 @@ fn stress(args: &StressArgs) -> Result<ExitCode, ExitCode> {
         let gpu_image = shader.render(&gpu, case.projection(), w, h, &builtins, &material).map_err(usage)?;
         Ok(Rendered {
             gpu: gpu_image.pixels,
-            cpu32: skyref::f32::render(&params, &scene, case.projection(), w, h),
-            cpu64: skyref::f64::render(&params, &scene, case.projection(), w, h),
+            cpu32: (family.render32)(&params, &scene, case.projection(), w, h),
+            cpu64: (family.render64)(&params, &scene, case.projection(), w, h),
         })
     };
     let locate = |case: &Case, worst: Option<(usize, usize)>| {
@@ -309,7 +377,7 @@ fn stress(args: &StressArgs) -> Result<ExitCode, ExitCode> {
     let grid_path = args.out_dir.join("grid.png");
     let (altitudes, suns): (&[f64], &[f64]) =
         if args.quick { (&QUICK_ALTITUDES, &QUICK_SUN_ELEVATIONS) } else { (&ALTITUDES, &SUN_ELEVATIONS) };
-    plot_grid(&grid_path, &name, &outcomes, altitudes, suns).map_err(environment)?;
+    plot_grid(&grid_path, &name, &family, &outcomes, altitudes, suns).map_err(environment)?;
 
     let context = Context {
         name: &name,
@@ -321,6 +389,7 @@ fn stress(args: &StressArgs) -> Result<ExitCode, ExitCode> {
         altitudes,
         suns,
         heatmaps: &heatmaps,
+        family: &family,
     };
     let report = report_markdown(&context, &outcomes, &summary);
     let md_path = args.out_dir.join("stress.md");
@@ -330,7 +399,8 @@ fn stress(args: &StressArgs) -> Result<ExitCode, ExitCode> {
 
     println!("gdsky stress: {name}, {} cases ({}), {:.1?}", outcomes.len(), mode(args.quick), elapsed);
     println!("adapter  {adapter}");
-    print!("{}", summary.table());
+    println!("reference {} f32 and f64, {} (--reference {})", family.label, family.arithmetic, reference.name());
+    print!("{}", summary.table(&family));
     println!(
         "wrote    {}, {}, {} and {} heatmaps",
         md_path.display(),
@@ -415,14 +485,17 @@ impl Summary {
         )
     }
 
-    fn table(&self) -> String {
+    /// The summary as a Markdown table; `family` names the reference's columns.
+    fn table(&self, family: &Family) -> String {
         let worst = |w: &Option<(f64, String)>| {
             w.as_ref().map(|(v, at)| format!("{v:.2e} ({at})")).unwrap_or_else(|| "—".into())
         };
         let mut out = String::new();
         let _ = writeln!(
             out,
-            "| | the shader on the GPU (f32) vs skyref f64 | skyref f32 (original arithmetic, CPU) vs f64 |"
+            "| | the shader on the GPU (f32) vs {label} f64 | {label} f32 ({}, CPU) vs f64 |",
+            family.arithmetic,
+            label = family.label
         );
         let _ = writeln!(out, "| --- | --- | --- |");
         let _ = writeln!(
@@ -461,6 +534,7 @@ struct Context<'a> {
     altitudes: &'a [f64],
     suns: &'a [f64],
     heatmaps: &'a [(String, String)],
+    family: &'a Family,
 }
 
 fn where_text(w: Option<(u32, u32, usize, f64)>) -> String {
@@ -482,7 +556,8 @@ fn report_markdown(ctx: &Context, outcomes: &[Outcome], summary: &Summary) -> St
         md,
         "Adapter: {}. Mode: {} ({} cases, {:.1?}). Panorama {}×{} (rows {:.2}° apart); horizon view {}×{}, \
          camera {HORIZON_FOV}° high toward the sun's azimuth, pitch 0 (rows {:.3}° apart). Relative error per RGB \
-         channel |x − f64| / max(|f64|, {:e}); the f64 truth is skyref with the same sample counts as the shader. \
+         channel |x − f64| / max(|f64|, {:e}); the f64 truth is {} (the reference, {}) with the same sample \
+         counts as the shader. \
          NaN / Inf count channels of the image under test; `where` is the worst channel's pixel (x, y), channel and \
          EYEDIR elevation.\n",
         ctx.adapter,
@@ -495,13 +570,16 @@ fn report_markdown(ctx: &Context, outcomes: &[Outcome], summary: &Summary) -> St
         ctx.horizon.0,
         ctx.horizon.1,
         HORIZON_FOV / f64::from(ctx.horizon.1),
-        sweep::FLOOR
+        sweep::FLOOR,
+        ctx.family.label,
+        ctx.family.arithmetic
     );
-    let _ = writeln!(md, "## Summary\n\n{}", summary.table());
+    let _ = writeln!(md, "## Summary\n\n{}", summary.table(ctx.family));
     let _ = writeln!(md, "`{}`\n", summary.line(outcomes.len()));
 
-    for (title, pick) in [("GPU f32 vs skyref f64", true), ("skyref f32 (the original arithmetic, CPU) vs f64", false)]
-    {
+    let gpu_title = format!("GPU f32 vs {} f64", ctx.family.label);
+    let cpu_title = format!("{} f32 ({}, CPU) vs f64", ctx.family.label, ctx.family.arithmetic);
+    for (title, pick) in [(gpu_title.as_str(), true), (cpu_title.as_str(), false)] {
         let _ = writeln!(
             md,
             "## {title}: worst relative error at default uniforms, altitude × sun elevation (both views)\n"
@@ -634,7 +712,14 @@ fn colour(t: f64) -> RGBColor {
 /// grid.png: two panels (GPU f32 and CPU f32, each against f64), cells altitude × sun
 /// elevation at default uniforms, coloured by log10 of the worst relative error over both views
 /// (1e-7 dark … 1 bright) and labelled with it; magenta where a value is NaN or ±∞.
-fn plot_grid(path: &Path, name: &str, outcomes: &[Outcome], altitudes: &[f64], suns: &[f64]) -> Result<(), String> {
+fn plot_grid(
+    path: &Path,
+    name: &str,
+    family: &Family,
+    outcomes: &[Outcome],
+    altitudes: &[f64],
+    suns: &[f64],
+) -> Result<(), String> {
     sweep::register_fonts();
     let (w, h) = (1600u32, 600u32);
     let mut rgb = vec![255u8; (w * h * 3) as usize];
@@ -651,10 +736,10 @@ fn plot_grid(path: &Path, name: &str, outcomes: &[Outcome], altitudes: &[f64], s
         );
         let root = root.titled(&title, ("sans-serif", 18)).map_err(|e| err(&e))?;
         let panels = root.split_evenly((1, 2));
-        for (panel, (title, gpu)) in panels
-            .iter()
-            .zip([("GPU f32 (the shader)", true), ("skyref f32 on the CPU (the original Freeman arithmetic)", false)])
-        {
+        for (panel, (title, gpu)) in panels.iter().zip([
+            ("GPU f32 (the shader)".to_string(), true),
+            (format!("{} f32 on the CPU ({})", family.label, family.arithmetic), false),
+        ]) {
             let (nx, ny) = (suns.len() as i32, altitudes.len() as i32);
             let mut chart = ChartBuilder::on(panel)
                 .caption(title, ("sans-serif", 16))
