@@ -31,7 +31,7 @@ macro_rules! freeman_fast {
         /// `const float SUN_DISK_EDGE`: 1 − 0.9998.
         const SUN_DISK_EDGE: $T = 2e-4;
         /// `const int GROUND_SAMPLES`: midpoint samples of the vertical column above the ground.
-        const GROUND_SAMPLES: i32 = 8;
+        const GROUND_SAMPLES: i32 = 4;
         const PI: $T = std::$T::consts::PI;
 
         /// The material in this precision, with the per-frame values the shader derives from
@@ -211,11 +211,13 @@ macro_rules! freeman_fast {
                 // s_end.
                 let mut depth = 0.0;
                 let mut previous = (s0, h0);
-                for a in [kinks[2], kinks[1], kinks[0]] {
-                    let sa = -crossing(a);
-                    if a > tangent_altitude && sa > s0 {
-                        depth += self.ozone_piece(previous, (sa, a), tangent_altitude, tangent_radius);
-                        previous = (sa, a);
+                if s0 < 0.0 {
+                    for a in [kinks[2], kinks[1], kinks[0]] {
+                        let sa = -crossing(a);
+                        if a > tangent_altitude && sa > s0 {
+                            depth += self.ozone_piece(previous, (sa, a), tangent_altitude, tangent_radius);
+                            previous = (sa, a);
+                        }
                     }
                 }
                 for a in kinks {
