@@ -113,6 +113,71 @@ fn value_json(v: &ConstValue) -> Value {
     }
 }
 
+/// A material texture and its sampler as the reflection describes them (`bindings.textures` and
+/// `bindings.samplers` of [`reflection`] are written from these): what a host needs to bind a
+/// texture to a sampler uniform by the uniform's name.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct TextureBinding {
+    /// The texture's name: the uniform's, or `name_i` for element i of a sampler array. The
+    /// WGSL global of the texture has this name, its sampler `name_sampler`, but a host should
+    /// bind by `group`/`binding`: WGSL emitters may rename globals.
+    pub name: String,
+    /// The Godot uniform it belongs to.
+    pub uniform: String,
+    /// Bind group ([`MATERIAL_GROUP`]).
+    pub group: u32,
+    /// Binding of the texture; its sampler is at `binding + 1`.
+    pub binding: u32,
+    /// `source_color`: the texels are sRGB-encoded colours, decoded to linear when read.
+    pub srgb: bool,
+    /// The `hint_default_*` name without its prefix (`black`, `white`, `transparent`).
+    pub default: Option<String>,
+    /// Every hint on the uniform, by name.
+    pub hints: Vec<String>,
+    /// The sampler's filter, the `filter_*` hint without its prefix (`nearest`, `linear`,
+    /// `nearest_mipmap`, `linear_mipmap`, `*_anisotropic`); Godot's default for sky shaders,
+    /// `linear_mipmap`, without one.
+    pub filter: String,
+    /// Whether the sampler repeats (`repeat_enable`, Godot's default) or clamps
+    /// (`repeat_disable`).
+    pub repeat: bool,
+}
+
+/// The material textures of a lowered shader, by binding: one per sampler uniform, one per
+/// element of a sampler array.
+pub fn texture_bindings(shader: &CheckedShader, lowered: &Lowered) -> Vec<TextureBinding> {
+    let mut textures: Vec<TextureBinding> = shader
+        .uniforms
+        .iter()
+        .flat_map(|u| {
+            let names: Vec<String> = match &u.ty {
+                Type::Array(_, n) => (0..*n).map(|i| format!("{}_{i}", u.name)).collect(),
+                _ => vec![u.name.clone()],
+            };
+            names.into_iter().filter_map(move |n| lowered.textures.get(&n).map(|slot| (u, n, slot)))
+        })
+        .filter(|(_, _, slot)| slot.group == MATERIAL_GROUP)
+        .map(|(u, name, slot)| {
+            let hint = |prefix: &str| u.hints.iter().find(|h| h.name.starts_with(prefix)).map(|h| h.name.clone());
+            // Godot's default for sky shaders: linear filtering with mipmaps, repeat on.
+            let filter = hint("filter_").unwrap_or_else(|| "filter_linear_mipmap".into());
+            TextureBinding {
+                name,
+                uniform: u.name.clone(),
+                group: slot.group,
+                binding: slot.binding,
+                srgb: u.hints.iter().any(|h| h.name == "source_color"),
+                default: hint("hint_default_").map(|h| h.trim_start_matches("hint_default_").to_string()),
+                hints: u.hints.iter().map(|h| h.name.clone()).collect(),
+                filter: filter.trim_start_matches("filter_").to_string(),
+                repeat: hint("repeat_").is_none_or(|r| r == "repeat_enable"),
+            }
+        })
+        .collect();
+    textures.sort_by_key(|t| t.binding);
+    textures
+}
+
 /// The reflection of a converted shader. `baked` lists the uniforms `--set` turned into
 /// constants, with their values; `overrides` the uniforms `--override` turned into WGSL
 /// overrides, with their ids and defaults; `uniforms` the rest.
@@ -138,43 +203,32 @@ pub fn reflection(name: &str, shader: &CheckedShader, lowered: &Lowered, baked: 
             })
         })
         .collect();
-    let mut textures: Vec<(u32, Value, Value)> = shader
-        .uniforms
-        .iter()
-        .flat_map(|u| {
-            let names: Vec<String> = match &u.ty {
-                Type::Array(_, n) => (0..*n).map(|i| format!("{}_{i}", u.name)).collect(),
-                _ => vec![u.name.clone()],
-            };
-            names.into_iter().filter_map(move |n| lowered.textures.get(&n).map(|slot| (u, n, slot)))
-        })
-        .map(|(u, texture_name, slot)| {
-            let hint = |prefix: &str| u.hints.iter().find(|h| h.name.starts_with(prefix)).map(|h| h.name.clone());
+    let textures: Vec<(Value, Value)> = texture_bindings(shader, lowered)
+        .into_iter()
+        .map(|t| {
+            let u = shader.uniforms.iter().find(|u| u.name == t.uniform);
             let texture = json!({
-                "name": texture_name,
-                "uniform": u.name,
-                "group": MATERIAL_GROUP,
-                "binding": slot.binding,
-                "type": u.ty.display(&structs).to_string(),
-                "srgb": u.hints.iter().any(|h| h.name == "source_color"),
-                "default": hint("hint_default_").map(|h| h.trim_start_matches("hint_default_").to_string()),
-                "hints": u.hints.iter().map(|h| h.name.clone()).collect::<Vec<_>>(),
-                "doc": u.doc,
+                "name": t.name,
+                "uniform": t.uniform,
+                "group": t.group,
+                "binding": t.binding,
+                "type": u.map(|u| u.ty.display(&structs).to_string()),
+                "srgb": t.srgb,
+                "default": t.default,
+                "hints": t.hints,
+                "doc": u.and_then(|u| u.doc.clone()),
             });
-            // Godot's default for sky shaders: linear filtering with mipmaps, repeat on.
-            let filter = hint("filter_").unwrap_or_else(|| "filter_linear_mipmap".into());
             let sampler = json!({
-                "name": format!("{texture_name}_sampler"),
-                "texture": texture_name,
-                "group": MATERIAL_GROUP,
-                "binding": slot.binding + 1,
-                "filter": filter.trim_start_matches("filter_"),
-                "repeat": hint("repeat_").is_none_or(|r| r == "repeat_enable"),
+                "name": format!("{}_sampler", t.name),
+                "texture": t.name,
+                "group": t.group,
+                "binding": t.binding + 1,
+                "filter": t.filter,
+                "repeat": t.repeat,
             });
-            (slot.binding, texture, sampler)
+            (texture, sampler)
         })
         .collect();
-    textures.sort_by_key(|t| t.0);
     let used: Vec<&str> = shader.builtins_used.iter().copied().collect();
     let uses = |prefix: &str| used.iter().any(|b| b.starts_with(prefix));
     let mut passes = vec!["full", "cubemap"];
@@ -229,8 +283,8 @@ pub fn reflection(name: &str, shader: &CheckedShader, lowered: &Lowered, baked: 
                     "sampler_binding": binding + 1,
                 }))
                 .collect::<Vec<_>>(),
-            "textures": textures.iter().map(|t| t.1.clone()).collect::<Vec<_>>(),
-            "samplers": textures.iter().map(|t| t.2.clone()).collect::<Vec<_>>(),
+            "textures": textures.iter().map(|t| t.0.clone()).collect::<Vec<_>>(),
+            "samplers": textures.iter().map(|t| t.1.clone()).collect::<Vec<_>>(),
         },
         "depth": depth_json(&lowered.module),
         "uniforms": uniforms,

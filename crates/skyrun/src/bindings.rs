@@ -48,7 +48,10 @@ pub enum BindingKind {
     Texture {
         /// 2D, 2D array, 3D or cube.
         dimension: wgpu::TextureViewDimension,
-        /// Float (filterable), signed or unsigned integer.
+        /// Float, signed or unsigned integer. A float texture is filterable when the module
+        /// samples it (`textureSample*`, `textureGather`, naga's `ImageSample`) and not
+        /// filterable when it only loads texels from it (`textureLoad`, Godot's `texelFetch`),
+        /// so that a 32-bit float texture, which core WebGPU cannot filter, can be bound to it.
         sample_type: wgpu::TextureSampleType,
     },
     /// A filtering sampler.
@@ -84,46 +87,198 @@ impl fmt::Display for BindingError {
 impl std::error::Error for BindingError {}
 
 /// Every resource a WGSL module declares, sorted by group and binding.
+///
+/// A float texture is declared filterable only when the module samples it (see
+/// [`BindingKind::Texture`] and [`sampled_images`]).
 pub fn discover(wgsl: &str) -> Result<Vec<Binding>, BindingError> {
     let module = naga::front::wgsl::parse_str(wgsl).map_err(|e| BindingError::Parse(e.emit_to_string(wgsl)))?;
     let mut layouter = naga::proc::Layouter::default();
     layouter.update(module.to_ctx()).map_err(|e| BindingError::Parse(e.to_string()))?;
+    let sampled = sampled_images(&module);
     let mut found = Vec::new();
-    for (_, var) in module.global_variables.iter() {
+    for (handle, var) in module.global_variables.iter() {
         let Some(rb) = &var.binding else { continue };
         let name = var.name.clone().unwrap_or_else(|| format!("group{}_binding{}", rb.group, rb.binding));
-        let unsupported = |what: &str| BindingError::Unsupported { name: name.clone(), what: what.to_string() };
-        if rb.group > GLOBAL_UNIFORM_GROUP {
-            return Err(unsupported(&format!("group {} is outside the sky interface (groups 0–3)", rb.group)));
-        }
-        let kind = match (&var.space, &module.types[var.ty].inner) {
-            (naga::AddressSpace::Uniform, _) => BindingKind::Uniform { size: layouter[var.ty].size },
-            (naga::AddressSpace::Handle, naga::TypeInner::Sampler { comparison: false }) => BindingKind::Sampler,
-            (naga::AddressSpace::Handle, naga::TypeInner::Image { dim, arrayed, class }) => {
-                let naga::ImageClass::Sampled { kind, multi: false } = class else {
-                    return Err(unsupported("only single-sampled, sampled textures have a stand-in"));
-                };
-                let sample_type = match kind {
-                    naga::ScalarKind::Float => wgpu::TextureSampleType::Float { filterable: true },
-                    naga::ScalarKind::Sint => wgpu::TextureSampleType::Sint,
-                    naga::ScalarKind::Uint => wgpu::TextureSampleType::Uint,
-                    _ => return Err(unsupported("a texture of bool samples")),
-                };
-                let dimension = match (dim, arrayed) {
-                    (naga::ImageDimension::D2, false) => wgpu::TextureViewDimension::D2,
-                    (naga::ImageDimension::D2, true) => wgpu::TextureViewDimension::D2Array,
-                    (naga::ImageDimension::D3, false) => wgpu::TextureViewDimension::D3,
-                    (naga::ImageDimension::Cube, false) => wgpu::TextureViewDimension::Cube,
-                    _ => return Err(unsupported("only 2D, 2D-array, 3D and cube textures have a stand-in")),
-                };
-                BindingKind::Texture { dimension, sample_type }
-            }
-            _ => return Err(unsupported("storage buffers, comparison samplers and binding arrays have no stand-in")),
-        };
-        found.push(Binding { name, group: rb.group, binding: rb.binding, kind });
+        found.push(describe(&module, &layouter, &sampled, handle, var, rb, name)?);
     }
     found.sort_by_key(|b| (b.group, b.binding));
     Ok(found)
+}
+
+/// The image globals of `module` that some function samples (naga `ImageSample`, which covers
+/// WGSL's `textureSample*` and `textureGather*`), following images passed to functions as
+/// arguments through every call. When the analysis cannot tell (an image expression that is
+/// neither a global nor an argument; none occurs in the modules gdsky emits, which have no
+/// binding arrays), every image counts as sampled: the filterable layout the harness used for
+/// all float textures before it told the two apart.
+pub fn sampled_images(module: &naga::Module) -> std::collections::HashSet<naga::Handle<naga::GlobalVariable>> {
+    use naga::{Expression, Handle};
+    use std::collections::HashSet;
+
+    /// Where an image expression comes from.
+    #[derive(Clone, Copy, PartialEq, Eq, Hash)]
+    enum Source {
+        Global(Handle<naga::GlobalVariable>),
+        Argument(u32),
+        Unknown,
+    }
+    fn source(f: &naga::Function, e: Handle<Expression>) -> Source {
+        match f.expressions[e] {
+            Expression::GlobalVariable(g) => Source::Global(g),
+            Expression::FunctionArgument(i) => Source::Argument(i),
+            _ => Source::Unknown,
+        }
+    }
+    /// Every call in a block, nested blocks included: (callee, its arguments).
+    fn calls(block: &naga::Block, out: &mut Vec<(Handle<naga::Function>, Vec<Handle<Expression>>)>) {
+        for statement in block.iter() {
+            match statement {
+                naga::Statement::Block(b) => calls(b, out),
+                naga::Statement::If { accept, reject, .. } => {
+                    calls(accept, out);
+                    calls(reject, out);
+                }
+                naga::Statement::Switch { cases, .. } => cases.iter().for_each(|c| calls(&c.body, out)),
+                naga::Statement::Loop { body, continuing, .. } => {
+                    calls(body, out);
+                    calls(continuing, out);
+                }
+                naga::Statement::Call { function, arguments, .. } => out.push((*function, arguments.clone())),
+                _ => {}
+            }
+        }
+    }
+
+    // Per function: the images it samples directly, and its calls.
+    struct Summary {
+        function: Option<Handle<naga::Function>>,
+        direct: HashSet<Source>,
+        calls: Vec<(Handle<naga::Function>, Vec<Source>)>,
+    }
+    let summarize = |handle: Option<Handle<naga::Function>>, f: &naga::Function| {
+        let direct = f
+            .expressions
+            .iter()
+            .filter_map(|(_, e)| match e {
+                Expression::ImageSample { image, .. } => Some(source(f, *image)),
+                _ => None,
+            })
+            .collect();
+        let mut found = Vec::new();
+        calls(&f.body, &mut found);
+        let calls =
+            found.into_iter().map(|(callee, args)| (callee, args.iter().map(|a| source(f, *a)).collect())).collect();
+        Summary { function: handle, direct, calls }
+    };
+    let summaries: Vec<Summary> = module
+        .functions
+        .iter()
+        .map(|(h, f)| summarize(Some(h), f))
+        .chain(module.entry_points.iter().map(|ep| summarize(None, &ep.function)))
+        .collect();
+    // Which arguments of which function are sampled, to a fixed point: an argument passed on to
+    // a callee's sampled argument is sampled too.
+    let mut sampled_args: HashSet<(Handle<naga::Function>, u32)> = HashSet::new();
+    loop {
+        let before = sampled_args.len();
+        for s in &summaries {
+            let Some(me) = s.function else { continue };
+            for source in &s.direct {
+                if let Source::Argument(i) = source {
+                    sampled_args.insert((me, *i));
+                }
+            }
+            for (callee, args) in &s.calls {
+                for (j, arg) in args.iter().enumerate() {
+                    if let Source::Argument(i) = arg
+                        && sampled_args.contains(&(*callee, j as u32))
+                    {
+                        sampled_args.insert((me, *i));
+                    }
+                }
+            }
+        }
+        if sampled_args.len() == before {
+            break;
+        }
+    }
+    let mut sampled = HashSet::new();
+    let mut unknown = false;
+    for s in &summaries {
+        for source in &s.direct {
+            match source {
+                Source::Global(g) => {
+                    sampled.insert(*g);
+                }
+                Source::Unknown => unknown = true,
+                Source::Argument(_) => {}
+            }
+        }
+        for (callee, args) in &s.calls {
+            for (j, arg) in args.iter().enumerate() {
+                if sampled_args.contains(&(*callee, j as u32)) {
+                    match arg {
+                        Source::Global(g) => {
+                            sampled.insert(*g);
+                        }
+                        Source::Unknown => unknown = true,
+                        Source::Argument(_) => {}
+                    }
+                }
+            }
+        }
+    }
+    if unknown {
+        sampled.extend(
+            module
+                .global_variables
+                .iter()
+                .filter(|(_, v)| matches!(module.types[v.ty].inner, naga::TypeInner::Image { .. }))
+                .map(|(h, _)| h),
+        );
+    }
+    sampled
+}
+
+/// What one resource global is.
+fn describe(
+    module: &naga::Module,
+    layouter: &naga::proc::Layouter,
+    sampled: &std::collections::HashSet<naga::Handle<naga::GlobalVariable>>,
+    handle: naga::Handle<naga::GlobalVariable>,
+    var: &naga::GlobalVariable,
+    rb: &naga::ResourceBinding,
+    name: String,
+) -> Result<Binding, BindingError> {
+    let unsupported = |what: &str| BindingError::Unsupported { name: name.clone(), what: what.to_string() };
+    if rb.group > GLOBAL_UNIFORM_GROUP {
+        return Err(unsupported(&format!("group {} is outside the sky interface (groups 0–3)", rb.group)));
+    }
+    let kind = match (&var.space, &module.types[var.ty].inner) {
+        (naga::AddressSpace::Uniform, _) => BindingKind::Uniform { size: layouter[var.ty].size },
+        (naga::AddressSpace::Handle, naga::TypeInner::Sampler { comparison: false }) => BindingKind::Sampler,
+        (naga::AddressSpace::Handle, naga::TypeInner::Image { dim, arrayed, class }) => {
+            let naga::ImageClass::Sampled { kind, multi: false } = class else {
+                return Err(unsupported("only single-sampled, sampled textures have a stand-in"));
+            };
+            let sample_type = match kind {
+                naga::ScalarKind::Float => wgpu::TextureSampleType::Float { filterable: sampled.contains(&handle) },
+                naga::ScalarKind::Sint => wgpu::TextureSampleType::Sint,
+                naga::ScalarKind::Uint => wgpu::TextureSampleType::Uint,
+                _ => return Err(unsupported("a texture of bool samples")),
+            };
+            let dimension = match (dim, arrayed) {
+                (naga::ImageDimension::D2, false) => wgpu::TextureViewDimension::D2,
+                (naga::ImageDimension::D2, true) => wgpu::TextureViewDimension::D2Array,
+                (naga::ImageDimension::D3, false) => wgpu::TextureViewDimension::D3,
+                (naga::ImageDimension::Cube, false) => wgpu::TextureViewDimension::Cube,
+                _ => return Err(unsupported("only 2D, 2D-array, 3D and cube textures have a stand-in")),
+            };
+            BindingKind::Texture { dimension, sample_type }
+        }
+        _ => return Err(unsupported("storage buffers, comparison samplers and binding arrays have no stand-in")),
+    };
+    Ok(Binding { name, group: rb.group, binding: rb.binding, kind })
 }
 
 /// The layout entry for one binding.
@@ -247,6 +402,36 @@ mod tests {
                 ),
             ]
         );
+    }
+
+    #[test]
+    fn only_sampled_float_textures_are_filterable() {
+        // `table` is only loaded; `clouds` is sampled two calls deep through arguments; `size`
+        // is only measured; `direct` is sampled in the entry point itself.
+        let wgsl = r#"
+            @group(1) @binding(1) var table: texture_2d<f32>;
+            @group(1) @binding(3) var clouds: texture_2d<f32>;
+            @group(1) @binding(4) var clouds_sampler: sampler;
+            @group(1) @binding(5) var size: texture_2d<f32>;
+            @group(1) @binding(7) var direct: texture_2d<f32>;
+            fn inner(t: texture_2d<f32>, s: sampler) -> vec4<f32> { return textureSample(t, s, vec2(0.5)); }
+            fn outer(t: texture_2d<f32>, s: sampler) -> vec4<f32> { return inner(t, s); }
+            fn load(t: texture_2d<f32>) -> vec4<f32> { return textureLoad(t, vec2(0, 0), 0); }
+            @fragment fn main() -> @location(0) vec4<f32> {
+                let d = vec2<f32>(textureDimensions(size));
+                return load(table) + outer(clouds, clouds_sampler) + vec4(d, 0.0, 0.0)
+                    + textureSample(direct, clouds_sampler, vec2(0.5));
+            }
+        "#;
+        let found = discover(wgsl).expect("parses");
+        let filterable = |name: &str| match found.iter().find(|b| b.name == name).map(|b| b.kind) {
+            Some(BindingKind::Texture { sample_type: wgpu::TextureSampleType::Float { filterable }, .. }) => filterable,
+            other => panic!("{name}: {other:?}"),
+        };
+        assert!(!filterable("table"));
+        assert!(filterable("clouds"));
+        assert!(!filterable("size"));
+        assert!(filterable("direct"));
     }
 
     #[test]

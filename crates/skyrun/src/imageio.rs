@@ -202,7 +202,7 @@ pub fn read_exr(path: &Path) -> Result<Image, ImageError> {
 }
 
 /// [`read_exr`] on bytes already in memory; `path` is only for messages.
-fn decode_exr(path: &Path, bytes: &[u8]) -> Result<Image, ImageError> {
+pub(crate) fn decode_exr(path: &Path, bytes: &[u8]) -> Result<Image, ImageError> {
     // The exr crate is not panic-free on corrupt data: fuzzing 1.74.2 makes its B44 decoder
     // overflow (`attempt to subtract with overflow`) on a few percent of mutated files. Such a
     // panic becomes an error here; the panic hook still prints its message to stderr.

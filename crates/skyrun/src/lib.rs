@@ -40,7 +40,13 @@
 //!   as Godot binds them: a sub-pass texture not rendered (or the one being rendered) is white,
 //!   RADIANCE and, in the cubemap pass, the sub-pass textures are black (Godot's cubemap pass
 //!   reads half/quarter *cubemaps*, which the harness does not render), material textures are
-//!   white, global uniforms (group 3) zero. Storage buffers, comparison samplers and binding
+//!   white, global uniforms (group 3) zero.
+//! * Material textures: [`SkyShader::set_texture`] binds real texels ([`TextureData`]:
+//!   Rgba32Float, Rgba16Float, Rgba8Unorm, Rgba8UnormSrgb) to a sampler uniform by its name,
+//!   mapped to the bindings through the reflection ([`SkyShader::with_material_textures`]), with
+//!   samplers built from the uniforms' filter and repeat hints; [`read_texture`] reads OpenEXR
+//!   (f32) and PNG (8-bit, sRGB with `source_color`) files. A float texture the module only
+//!   loads from (`texelFetch`) is declared non-filterable, so 32-bit floats bind to it. Storage buffers, comparison samplers and binding
 //!   arrays are refused by name ([`bindings::BindingError`]).
 //! * [`material_with_defaults`] fills the material block of any shader from its own defaults
 //!   plus `--set`-style overrides.
@@ -118,8 +124,10 @@ mod metrics;
 mod render;
 pub mod safe_io;
 mod skip;
+mod textures;
 
 pub use builtins::{RenderPass, SkyBuiltins, SkyLight, offsets};
+pub use gdsky_naga::reflect::TextureBinding;
 pub use gpu::{AdapterSummary, Gpu, NoAdapter};
 pub use imageio::{
     DEFAULT_EXPOSURE, DEFAULT_WHITE, Image, ImageError, MAX_EXR_BYTES, MAX_READ_PIXELS, MAX_RENDER_PIXELS,
@@ -134,6 +142,7 @@ pub use metrics::{Metrics, PixelDiff, compare, worst_pixels};
 pub use render::{RenderError, Rendered, SkyShader, SubPasses, fragment_entry, render, sub_pass_size};
 pub use skip::{MAX_MASK_BYTES, MaskError, OCCLUDED, Occluder, RenderOptions, SkyResolution, UpsampleFilter};
 pub use skyref::Projection;
+pub use textures::{MAX_TEXTURE_FILE_BYTES, MAX_TEXTURE_SIDE, TexelFormat, TextureData, TextureError, read_texture};
 
 #[cfg(test)]
 mod tests;

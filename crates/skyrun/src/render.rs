@@ -176,6 +176,14 @@ pub struct SkyShader {
     /// clamped vertically (v clamp to edge).
     panorama_sampler: wgpu::Sampler,
     texture_defaults: Vec<((u32, u32), [f32; 4])>,
+    /// The material textures as the reflection describes them
+    /// ([`SkyShader::with_material_textures`]): how a uniform's name maps to its bindings.
+    material_textures: Vec<gdsky_naga::reflect::TextureBinding>,
+    /// Textures the host gave ([`SkyShader::set_texture`]), by (group, binding).
+    provided: HashMap<(u32, u32), wgpu::TextureView>,
+    /// Samplers built from the uniforms' filter and repeat hints, by the sampler's (group,
+    /// binding); a material sampler not listed repeats and filters linearly.
+    material_samplers: HashMap<(u32, u32), wgpu::Sampler>,
     /// Values of the module's overrides (`gdsky convert --override`), by `@id` as text; an
     /// override not listed keeps its default.
     constants: Vec<(String, f64)>,
@@ -270,6 +278,9 @@ impl SkyShader {
                 clamp_sampler: sampler(wgpu::AddressMode::ClampToEdge, wgpu::AddressMode::ClampToEdge),
                 panorama_sampler: sampler(wgpu::AddressMode::Repeat, wgpu::AddressMode::ClampToEdge),
                 texture_defaults: Vec::new(),
+                material_textures: Vec::new(),
+                provided: HashMap::new(),
+                material_samplers: HashMap::new(),
                 constants: Vec::new(),
                 far,
                 upsample: Mutex::new(HashMap::new()),
@@ -284,6 +295,92 @@ impl SkyShader {
     pub fn with_texture_defaults(mut self, defaults: Vec<((u32, u32), [f32; 4])>) -> Self {
         self.texture_defaults = defaults;
         self
+    }
+
+    /// The shader's material textures as the reflection describes them
+    /// ([`gdsky_naga::reflect::texture_bindings`]): what [`SkyShader::set_texture`] maps a
+    /// uniform's name through, and the filter and repeat hints each material sampler is built
+    /// from (`filter_nearest*` → nearest, other filters → linear; `repeat_disable` → clamp to
+    /// edge, else repeat; anisotropy not applied). Without it, material samplers repeat and
+    /// filter linearly, and no texture can be given by name.
+    #[must_use]
+    pub fn with_material_textures(mut self, gpu: &Gpu, textures: Vec<gdsky_naga::reflect::TextureBinding>) -> Self {
+        self.material_samplers = textures
+            .iter()
+            .filter(|t| self.declares(t.group, t.binding + 1))
+            .map(|t| ((t.group, t.binding + 1), crate::textures::sampler(&gpu.device, &t.filter, t.repeat)))
+            .collect();
+        self.material_textures = textures;
+        self
+    }
+
+    /// Binds `data` to the material texture `name` (the sampler uniform's name; element i of a
+    /// sampler array is `name_i`) for every later render, in place of its stand-in. The name is
+    /// looked up in the reflection given to [`SkyShader::with_material_textures`]; a texture the
+    /// module does not declare (a uniform the shader never reads is pruned) is accepted and
+    /// unused.
+    ///
+    /// Errors: a name that is not a material texture (the message lists the shader's);
+    /// [`TexelFormat::Rgba32Float`](crate::TexelFormat::Rgba32Float) for a texture the shader
+    /// samples with filtering (only a texture it reads solely with `texelFetch` is declared
+    /// non-filterable, see [`crate::bindings::discover`]); a texture that is not a float 2D one
+    /// (3D, cube, array and integer textures cannot be given yet); wgpu refusing the texture.
+    pub fn set_texture(&mut self, gpu: &Gpu, name: &str, data: &crate::TextureData) -> Result<(), crate::TextureError> {
+        use crate::TextureError;
+        let Some(slot) = self.material_textures.iter().find(|t| t.name == name) else {
+            return Err(TextureError::UnknownName {
+                name: name.to_string(),
+                known: self.material_textures.iter().map(|t| t.name.clone()).collect(),
+            });
+        };
+        let key = (slot.group, slot.binding);
+        let Some(binding) = self.bindings.iter().find(|b| (b.group, b.binding) == key) else {
+            return Ok(());
+        };
+        let unsupported = |what: &str| TextureError::Unsupported { name: name.to_string(), what: what.to_string() };
+        let BindingKind::Texture { dimension, sample_type } = binding.kind else {
+            return Err(unsupported("its binding is not a texture"));
+        };
+        if dimension != wgpu::TextureViewDimension::D2 {
+            return Err(unsupported(&format!(
+                "a {dimension:?} texture; only 2D textures (sampler2D) can be given so far"
+            )));
+        }
+        let wgpu::TextureSampleType::Float { filterable } = sample_type else {
+            return Err(unsupported(
+                "an integer texture (isampler2D, usampler2D); only float textures can be given so far",
+            ));
+        };
+        if filterable && !data.format().filterable() {
+            return Err(TextureError::NotFilterable { name: name.to_string() });
+        }
+        let size = wgpu::Extent3d { width: data.width(), height: data.height(), depth_or_array_layers: 1 };
+        let view = scoped(gpu, || {
+            let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(name),
+                size,
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: data.format().wgpu(),
+                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+                view_formats: &[],
+            });
+            gpu.queue.write_texture(
+                texture.as_image_copy(),
+                data.bytes(),
+                wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(data.width() * data.format().bytes_per_texel()),
+                    rows_per_image: Some(data.height()),
+                },
+                size,
+            );
+            texture.create_view(&wgpu::TextureViewDescriptor::default())
+        })
+        .map_err(|e| TextureError::Wgpu(e.to_string()))?;
+        self.provided.insert(key, view);
+        Ok(())
     }
 
     /// Values for the module's overrides (WGSL `override`, `gdsky convert --override`), keyed by
@@ -707,9 +804,14 @@ impl SkyShader {
                         Resource::Buffer(uniform_buffer(gpu, &b.name, &vec![0; size as usize]))
                     }
                     (_, _, BindingKind::Sampler) if sky => Resource::Sampler(self.clamp_sampler.clone()),
-                    (_, _, BindingKind::Sampler) => Resource::Sampler(self.repeat_sampler.clone()),
+                    (_, _, BindingKind::Sampler) => Resource::Sampler(
+                        self.material_samplers.get(&(b.group, b.binding)).unwrap_or(&self.repeat_sampler).clone(),
+                    ),
                     (_, binding, BindingKind::Texture { dimension, sample_type }) => match sub_pass {
                         Some(view) => Resource::View(view.clone()),
+                        None if self.provided.contains_key(&(b.group, binding)) => {
+                            Resource::View(self.provided[&(b.group, binding)].clone())
+                        }
                         // RADIANCE is black (no radiance map is rendered), and so are the
                         // sub-pass textures in the cubemap pass (Godot's cubemap-family
                         // default); a sub-pass texture not rendered is white; a material
