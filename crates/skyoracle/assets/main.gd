@@ -147,6 +147,14 @@ func _uniform_value(uniform: Dictionary):
 			for x in v:
 				ints.append(int(x))
 			return ints
+		"texture_rgbaf":
+			# [width, height, base64 of little-endian f32 RGBA, row 0 first]; the crate checked the
+			# sizes, and create_from_data refuses (null) a byte count that does not match them.
+			var bytes := Marshalls.base64_to_raw(str(v[2]))
+			var image := Image.create_from_data(int(v[0]), int(v[1]), false, Image.FORMAT_RGBAF, bytes)
+			if image == null:
+				return null
+			return ImageTexture.create_from_image(image)
 	return null
 
 
@@ -165,7 +173,7 @@ func _render(job: Dictionary) -> Dictionary:
 			return {"error": "the shader declares no uniform named %s" % uniform.get("name")}
 		var value = _uniform_value(uniform)
 		if value == null:
-			return {"error": "uniform %s: unsupported type %s" % [uniform.get("name"), uniform.get("type")]}
+			return {"error": "uniform %s: unsupported type %s, or texture data that does not match its size" % [uniform.get("name"), uniform.get("type")]}
 		material.set_shader_parameter(str(uniform.get("name")), value)
 
 	var cam: Dictionary = job.get("camera", {})

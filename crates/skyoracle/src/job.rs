@@ -3,6 +3,7 @@
 
 use std::time::Duration;
 
+use base64::Engine as _;
 use serde_json::{Value, json};
 
 /// The camera, as Godot's `Camera3D` takes it. Yaw 0, pitch 0 looks toward −Z with +Y up.
@@ -81,7 +82,24 @@ pub enum UniformValue {
     /// A `Color` (r, g, b, a), as Godot's inspector sets a `vec3`/`vec4` uniform with a
     /// `source_color` hint (sRGB; see the crate documentation for the conversion measured).
     Color([f32; 4]),
+    /// A `sampler2D`: `width` × `height` RGBA texels of 32-bit floats, row 0 first (texel
+    /// (x, y) is `texels[y * width + x]`, what `texelFetch(t, ivec2(x, y), 0)` reads). `main.gd`
+    /// builds an `Image` of `FORMAT_RGBAF` (no mipmaps) and an `ImageTexture` from it. The texels
+    /// travel as base64 of their little-endian bytes: exact, and about a third the size of the
+    /// same floats as JSON numbers (see the crate documentation for what Godot keeps of them).
+    TextureRgbaF32 {
+        /// Texels per row, 1 ..= [`MAX_TEXTURE_SIDE`].
+        width: u32,
+        /// Rows, 1 ..= [`MAX_TEXTURE_SIDE`].
+        height: u32,
+        /// `width × height` texels, row-major.
+        texels: Vec<[f32; 4]>,
+    },
 }
+
+/// The largest side of a [`UniformValue::TextureRgbaF32`]: a 4096² RGBA f32 texture is 256 MiB,
+/// already more than is sensible to push through JSON into a browser tab.
+pub const MAX_TEXTURE_SIDE: u32 = 4096;
 
 impl UniformValue {
     fn to_json(&self) -> (&'static str, Value) {
@@ -99,6 +117,11 @@ impl UniformValue {
             Self::Color(v) => ("color", json!(v)),
             Self::FloatArray(v) => ("float_array", json!(v)),
             Self::IntArray(v) => ("int_array", json!(v)),
+            Self::TextureRgbaF32 { width, height, texels } => {
+                let bytes: Vec<u8> = texels.iter().flatten().flat_map(|c| c.to_le_bytes()).collect();
+                let data = base64::engine::general_purpose::STANDARD.encode(bytes);
+                ("texture_rgbaf", json!([width, height, data]))
+            }
         }
     }
 
@@ -109,8 +132,24 @@ impl UniformValue {
             Self::Vec3(v) => v.iter().all(|c| c.is_finite()),
             Self::Vec4(v) | Self::Color(v) => v.iter().all(|c| c.is_finite()),
             Self::FloatArray(v) => v.iter().all(|c| c.is_finite()),
+            Self::TextureRgbaF32 { texels, .. } => texels.iter().flatten().all(|c| c.is_finite()),
             _ => true,
         }
+    }
+
+    /// For a texture, whether its size is one Godot takes and matches its texels.
+    fn check_size(&self) -> Result<(), String> {
+        let Self::TextureRgbaF32 { width, height, texels } = self else { return Ok(()) };
+        let side = 1..=MAX_TEXTURE_SIDE;
+        if !side.contains(width) || !side.contains(height) {
+            return Err(format!("texture size {width}×{height} is outside 1…{MAX_TEXTURE_SIDE}"));
+        }
+        // u64: 4096 × 4096 fits u32, but the product is compared with a usize either way.
+        let expected = u64::from(*width) * u64::from(*height);
+        if texels.len() as u64 != expected {
+            return Err(format!("a {width}×{height} texture needs {expected} texels, {} given", texels.len()));
+        }
+        Ok(())
     }
 }
 
@@ -231,7 +270,12 @@ impl Job {
                 return Err("the sun has a non-finite value".into());
             }
         }
+        for (name, value) in &self.uniforms {
+            value.check_size().map_err(|e| format!("uniform `{name}`: {e}"))?;
+        }
         if let Some((name, _)) = self.uniforms.iter().find(|(_, v)| !v.is_finite()) {
+            // A texture could carry NaN in its bytes; refused all the same, since no sky
+            // table has a reason to hold one and Godot's treatment of it was not measured.
             return Err(format!("uniform `{name}` has a non-finite value (JSON cannot carry it)"));
         }
         Ok(())
@@ -275,5 +319,43 @@ impl Job {
             "settle_frames": 0,
             "timeout_ms": self.time_allowed().as_millis() as u64,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn texture(width: u32, height: u32, texels: Vec<[f32; 4]>) -> Job {
+        let value = UniformValue::TextureRgbaF32 { width, height, texels };
+        Job { uniforms: vec![("t".into(), value)], ..Job::new("shader_type sky;", 4, 2) }
+    }
+
+    #[test]
+    fn texture_sizes_and_values_are_validated() {
+        assert_eq!(texture(2, 1, vec![[0.0; 4]; 2]).validate(), Ok(()));
+        assert_eq!(texture(MAX_TEXTURE_SIDE, 1, vec![[0.0; 4]; MAX_TEXTURE_SIDE as usize]).validate(), Ok(()));
+        let refused = |job: Job, what: &str| {
+            let e = job.validate().expect_err(what);
+            assert!(e.contains(what), "{e:?} does not say {what:?}");
+        };
+        refused(texture(2, 2, vec![[0.0; 4]; 3]), "needs 4 texels, 3 given");
+        refused(texture(0, 1, Vec::new()), "outside 1…4096");
+        refused(texture(1, MAX_TEXTURE_SIDE + 1, vec![[0.0; 4]; 4097]), "outside 1…4096");
+        refused(texture(1, 1, vec![[0.0, f32::NAN, 0.0, 0.0]]), "non-finite");
+        refused(texture(1, 1, vec![[f32::INFINITY, 0.0, 0.0, 0.0]]), "non-finite");
+    }
+
+    #[test]
+    fn texture_travels_as_base64_of_little_endian_f32() {
+        let texels = vec![[1.0, -2.5, 1e-30, 3.4e38], [0.0, 0.5, 65504.0, 1.0]];
+        let json = texture(2, 1, texels.clone()).to_json(7);
+        let uniform = &json["uniforms"][0];
+        assert_eq!(uniform["type"], "texture_rgbaf");
+        assert_eq!((uniform["value"][0].as_u64(), uniform["value"][1].as_u64()), (Some(2), Some(1)));
+        let text = uniform["value"][2].as_str().expect("a base64 string");
+        let bytes = base64::engine::general_purpose::STANDARD.decode(text).expect("base64");
+        let back: Vec<f32> = bytes.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect();
+        assert_eq!(back, texels.concat());
     }
 }

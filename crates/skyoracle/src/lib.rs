@@ -187,7 +187,7 @@ use serde_json::{Value, json};
 
 pub use compile::{CompileOutcome, ShaderError};
 pub use install::{INSTALL_COMMAND, Installation, Missing, MissingPart};
-pub use job::{Brackets, Camera, Job, MAX_SIDE, MIN_SIDE, Sun, UniformValue};
+pub use job::{Brackets, Camera, Job, MAX_SIDE, MAX_TEXTURE_SIDE, MIN_SIDE, Sun, UniformValue};
 pub use pck::write_pck;
 pub use recover::Transfer;
 

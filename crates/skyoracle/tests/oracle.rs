@@ -284,3 +284,156 @@ fn freeman_sky_renders_without_nan() {
         }
     }
 }
+
+/// Texels with values that a 16-bit float cannot hold (0.1, π, 1e−5 below f16's normal range;
+/// 1e5 and 3.4e38 above its largest; 1e−30 below its smallest) and that no 8-bit format could.
+const TEXELS: [[f32; 4]; 4] = [
+    [1.0, 0.1, 0.01, 1e5],
+    [1.2345e-5, std::f32::consts::PI, 123.456, 1e-30],
+    [3000.0, 1.2345e-3, 0.333_333_34, -2.5],
+    [7.77e-4, 42.0, 2.5e-5, 3.4e38],
+];
+
+/// A 4×1 RGBA f32 texture reaches `texelFetch` bit for bit in Godot 4.6's Compatibility renderer
+/// on WebGL2/SwiftShader (an `Image` of `FORMAT_RGBAF` stays RGBA32F: no conversion to half
+/// floats or 8 bits), and the recovery gives its RGB back within its own accuracy.
+#[test]
+fn texel_fetch_returns_the_given_texels_exactly() {
+    let mut oracle = oracle();
+    let texture = || UniformValue::TextureRgbaF32 { width: 4, height: 1, texels: TEXELS.to_vec() };
+
+    // Recovered: the shader of issue #12, 4 columns per texel, with FRAGCOORD.x / 4 for its
+    // SCREEN_UV.x · 4: SCREEN_UV is in pixels here (screen_uv_is_fragcoord_in_pixels).
+    let code = "shader_type sky;\nuniform sampler2D t : filter_nearest;\n\
+        void sky() {\n\tCOLOR = texelFetch(t, ivec2(int(FRAGCOORD.x / 4.0), 0), 0).rgb;\n}\n";
+    let job = Job { uniforms: vec![("t".into(), texture())], ..Job::new(code, 16, 2) };
+    let image = oracle.render(&job).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(image.inconsistent, 0);
+    let mut worst = 0f64;
+    for y in 0..2 {
+        for x in 0..16 {
+            let (got, want) = (image.pixel(x, y), TEXELS[x as usize / 4]);
+            for c in 0..3 {
+                let err = (f64::from(got[c]) / f64::from(want[c]) - 1.0).abs();
+                // The recovery's bound for constant colours (tests above).
+                let bound = if want[c] < 1e-4 { 0.008 } else { 0.0045 };
+                assert!(err <= bound, "texel {} channel {c}: {want:?} came back as {got:?}", x / 4);
+                worst = worst.max(err);
+            }
+        }
+    }
+    println!("texelFetch through the recovery: worst relative error {:.3} %", worst * 100.0);
+
+    // Bit for bit, inside the shader: every channel (alpha and the values outside the recovery's
+    // range included) against its bit pattern given as a uint array. R counts the channels whose
+    // bits match (4 for a texel that arrived exactly), G is the largest relative difference
+    // times 1e6 (so that one ulp, about 1e−7, is well above what the recovery calls black).
+    let code = "shader_type sky;\nuniform sampler2D t : filter_nearest;\nuniform uint BITS[16];\n\
+        void sky() {\n\
+        \tint x = clamp(int(FRAGCOORD.x / 4.0), 0, 3);\n\
+        \tvec4 v = texelFetch(t, ivec2(x, 0), 0);\n\
+        \tfloat same = 0.0;\n\tfloat diff = 0.0;\n\
+        \tfor (int c = 0; c < 4; c++) {\n\
+        \t\tfloat want = uintBitsToFloat(BITS[4 * x + c]);\n\
+        \t\tsame += floatBitsToUint(v[c]) == BITS[4 * x + c] ? 1.0 : 0.0;\n\
+        \t\tdiff = max(diff, abs(v[c] - want) / abs(want));\n\
+        \t}\n\
+        \tCOLOR = vec3(same, diff * 1e6, 1.0);\n}\n";
+    let bits: Vec<i32> = TEXELS.iter().flatten().map(|v| v.to_bits() as i32).collect();
+    let job = |bits: Vec<i32>| Job {
+        uniforms: vec![("t".into(), texture()), ("BITS".into(), UniformValue::IntArray(bits))],
+        ..Job::new(code, 16, 2)
+    };
+    // Power: one channel (texel 1's G, π) expected one ulp off is seen as one mismatch.
+    let mut off = bits.clone();
+    off[5] += 1;
+    let image = oracle.render(&job(off)).unwrap_or_else(|e| panic!("{e}"));
+    let p = image.pixel(5, 0);
+    let ulp = f64::from((f32::from_bits(bits[5] as u32 + 1) - TEXELS[1][1]) / TEXELS[1][1]) * 1e6;
+    assert!((p[0] - 3.0).abs() < 0.02 && (f64::from(p[1]) / ulp - 1.0).abs() < 0.01, "one ulp off read as {p:?}");
+    let image = oracle.render(&job(bits)).unwrap_or_else(|e| panic!("{e}"));
+    for x in 0..16 {
+        let p = image.pixel(x, 0);
+        assert!(
+            (p[0] - 4.0).abs() < 0.02 && p[1] == 0.0,
+            "texel {}: {} of 4 channels bit-exact, relative difference up to {:e} (want {:?})",
+            x / 4,
+            p[0],
+            p[1] / 1e6,
+            TEXELS[x as usize / 4]
+        );
+    }
+}
+
+/// A texture of the Freeman table's size (256×64) arrives whole and in place: texel (x, y) is
+/// what `texelFetch` reads at `ivec2(x, y)`, which is pixel (x, y) of the image (row 0 at the
+/// top). Prints what the texture costs a job.
+#[test]
+fn table_sized_texture_arrives_in_place() {
+    let mut oracle = oracle();
+    let (w, h) = (256u32, 64u32);
+    // Distinct values over 1e−4 … 1e2 per texel and channel (a fixed scramble of the index).
+    let texels: Vec<[f32; 4]> = (0..w * h)
+        .map(|i| {
+            let v = |c: u32| {
+                let k = (i * 3 + c).wrapping_mul(2_654_435_761) % 10_007;
+                10f64.powf(-4.0 + 6.0 * f64::from(k) / 10_007.0) as f32
+            };
+            [v(0), v(1), v(2), 1.0]
+        })
+        .collect();
+    let code = "shader_type sky;\nuniform sampler2D t : filter_nearest;\n\
+        void sky() {\n\tCOLOR = texelFetch(t, ivec2(FRAGCOORD.xy), 0).rgb;\n}\n";
+    let with = |texture_width: u32, texels: Vec<[f32; 4]>| Job {
+        uniforms: vec![(
+            "t".into(),
+            UniformValue::TextureRgbaF32 { width: texture_width, height: texels.len() as u32 / texture_width, texels },
+        )],
+        ..Job::new(code, w, h)
+    };
+    // The 1×1 job first, so that the shader's compilation is not counted against the table.
+    let small = oracle.render(&with(1, vec![[1.0; 4]])).unwrap_or_else(|e| panic!("{e}"));
+    let image = oracle.render(&with(w, texels.clone())).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(image.inconsistent, 0);
+    let mut worst = 0f64;
+    for (i, (got, want)) in image.pixels.iter().zip(&texels).enumerate() {
+        for c in 0..3 {
+            let err = (f64::from(got[c]) / f64::from(want[c]) - 1.0).abs();
+            assert!(err <= 0.0045, "pixel ({}, {}) channel {c}: {got:?}, texel {want:?}", i as u32 % w, i as u32 / w);
+            worst = worst.max(err);
+        }
+    }
+    // What the 256×64 texture adds to a job (encoding, JSON, base64 decoding, upload), and how
+    // long its texels would be as JSON numbers instead of base64.
+    let numbers = serde_json::to_string(&texels).map_or(0, |t| t.len());
+    println!(
+        "256×64 texture: worst {:.3} %; job {:.2?} (Godot {:.2?}) against {:.2?} (Godot {:.2?}) with a 1×1 texture; \
+         texels as base64 {} bytes, as JSON numbers {numbers} bytes",
+        worst * 100.0,
+        image.timing.wall,
+        image.timing.godot,
+        small.timing.wall,
+        small.timing.godot,
+        (texels.len() * 16).div_ceil(3) * 4,
+    );
+}
+
+/// SCREEN_UV in Godot 4.6's Compatibility sky pass is FRAGCOORD.xy, in pixels, not the
+/// viewport's 0…1 coordinates the documentation describes (Forward+ and gdsky give 0…1).
+#[test]
+fn screen_uv_is_fragcoord_in_pixels() {
+    let mut oracle = oracle();
+    let code = "shader_type sky;\nvoid sky() {\n\tCOLOR = vec3(SCREEN_UV, 0.5);\n}\n";
+    let image = oracle.render(&Job::new(code, 8, 4)).unwrap_or_else(|e| panic!("{e}"));
+    for (x, y) in [(0, 0), (7, 0), (3, 2), (7, 3)] {
+        let (p, want) = (image.pixel(x, y), [x as f32 + 0.5, y as f32 + 0.5]);
+        for c in 0..2 {
+            assert!((p[c] / want[c] - 1.0).abs() < 0.005, "SCREEN_UV at ({x}, {y}) is {:?}, not {want:?}", &p[..2]);
+        }
+    }
+    // Exactly, inside the shader.
+    let code = "shader_type sky;\nvoid sky() {\n\tCOLOR = vec3(abs(SCREEN_UV - FRAGCOORD.xy) * 1000.0, 1.0);\n}\n";
+    let image = oracle.render(&Job::new(code, 8, 4)).unwrap_or_else(|e| panic!("{e}"));
+    let worst = image.pixels.iter().flat_map(|p| [p[0], p[1]]).fold(0f32, f32::max) / 1000.0;
+    assert!(worst < 1e-6, "SCREEN_UV differs from FRAGCOORD.xy by up to {worst}");
+}
