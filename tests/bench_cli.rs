@@ -1,5 +1,6 @@
 //! `gdsky bench` through the binary on a tiny sweep: the CSV's columns and rows, the plot, the
-//! truth cache (reused, and recomputed when corrupt). No timing assertions. Needs a Vulkan
+//! truth cache (reused, and recomputed when corrupt); two shaders on one chart (each sweeping
+//! only the knobs it reads) with the comparison lines. No timing assertions. Needs a Vulkan
 //! adapter (lavapipe on a machine without a GPU).
 
 mod common;
@@ -17,7 +18,7 @@ fn scratch(name: &str) -> PathBuf {
     scratch_in("bench_cli", name)
 }
 
-const COLUMNS: &str = "view_samples,sun_samples,time_ms,time_min_ms,time_max_ms,runs,timer,mean_rel,p99_rel,max_rel,\
+const COLUMNS: &str = "shader,view_samples,sun_samples,time_ms,time_min_ms,time_max_ms,runs,timer,mean_rel,p99_rel,max_rel,\
                        mean_abs_tonemapped,nan,inf,pareto";
 
 #[test]
@@ -43,6 +44,11 @@ fn tiny_sweep_writes_csv_plot_and_reuses_the_truth() {
     let o = gdsky(&args, &cache);
     assert!(o.status.success(), "{}", text(&o));
     assert!(text(&o).contains("truth: computed"), "{}", text(&o));
+    assert!(
+        text(&o).contains("truth    skyref f64 sums at 128/32 samples"),
+        "the output names the truth:\n{}",
+        text(&o)
+    );
     assert!(text(&o).contains("Pareto front"), "{}", text(&o));
 
     let csv = std::fs::read_to_string(out.join("bench.csv")).expect("bench.csv written");
@@ -52,15 +58,15 @@ fn tiny_sweep_writes_csv_plot_and_reuses_the_truth() {
     for (line, (view, sun)) in lines[1..].iter().zip([("4", "2"), ("8", "2")]) {
         let cells: Vec<&str> = line.split(',').collect();
         assert_eq!(cells.len(), COLUMNS.split(',').count(), "{line}");
-        assert_eq!((cells[0], cells[1]), (view, sun), "{line}");
-        assert_eq!(cells[5], "1", "{line}");
+        assert_eq!((cells[0], cells[1], cells[2]), ("freeman_sky (bundled)", view, sun), "{line}");
+        assert_eq!(cells[6], "1", "{line}");
         // GPU timestamps where the adapter has them (lavapipe does), else wall time.
-        assert!(["gpu_timestamps", "wall"].contains(&cells[6]), "{line}");
-        let mean: f64 = cells[7].parse().expect("mean_rel is a number");
-        let max: f64 = cells[9].parse().expect("max_rel is a number");
+        assert!(["gpu_timestamps", "wall"].contains(&cells[7]), "{line}");
+        let mean: f64 = cells[8].parse().expect("mean_rel is a number");
+        let max: f64 = cells[10].parse().expect("max_rel is a number");
         // Four view samples against 128: a coarse quadrature, far from the truth but finite.
         assert!(mean > 1e-3 && mean <= max && max.is_finite(), "{line}");
-        assert_eq!((cells[11], cells[12]), ("0", "0"), "{line}");
+        assert_eq!((cells[12], cells[13]), ("0", "0"), "{line}");
     }
     // At least one configuration is on the front, whatever the timings.
     assert!(lines[1..].iter().any(|l| l.ends_with(",1")), "{csv}");
@@ -74,7 +80,7 @@ fn tiny_sweep_writes_csv_plot_and_reuses_the_truth() {
     assert!(text(&o).contains("truth: cached"), "{}", text(&o));
     let again = std::fs::read_to_string(out.join("bench.csv")).unwrap();
     let errors =
-        |csv: &str| csv.lines().map(|l| l.split(',').skip(7).take(6).collect::<Vec<_>>().join(",")).collect::<Vec<_>>();
+        |csv: &str| csv.lines().map(|l| l.split(',').skip(8).take(6).collect::<Vec<_>>().join(",")).collect::<Vec<_>>();
     assert_eq!(errors(&csv), errors(&again));
 
     // A corrupt entry is recomputed, not trusted.
@@ -97,4 +103,81 @@ fn bad_knobs_are_wrong_input() {
         let o = gdsky(&["bench", "--knob", knob, "-o", dir.to_str().unwrap()], &dir);
         assert_eq!(o.status.code(), Some(1), "--knob {knob}: {}", text(&o));
     }
+}
+
+#[test]
+fn two_shaders_on_one_chart_sweep_what_they_read_and_are_compared() {
+    let dir = scratch("two");
+    let (out, cache) = (dir.join("out"), dir.join("cache"));
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let original = root.join("fixtures/freeman_sky.gdshader");
+    let fast = root.join("shaders/freeman_fast.gdshader");
+    // The default truth (the integral), view_samples at its default sweeps: the original's
+    // eight values (sun_samples fixed at its default 8), the fast sky's finer eleven.
+    let args = [
+        "bench",
+        original.to_str().unwrap(),
+        fast.to_str().unwrap(),
+        "--knob",
+        "sun_samples=8",
+        "--size",
+        "32x16",
+        "--runs",
+        "1",
+        "-o",
+        out.to_str().unwrap(),
+    ];
+    let o = gdsky(&args, &cache);
+    assert!(o.status.success(), "{}", text(&o));
+    let all = text(&o);
+    assert!(all.contains("truth    skyref::truth"), "the output names the integral truth:\n{all}");
+    assert!(all.contains("freeman_fast declares but never reads sun_samples"), "{all}");
+    for name in ["freeman_sky", "freeman_fast"] {
+        assert!(all.contains(&format!("Pareto front of {name}")), "{all}");
+    }
+    // The two lines of issue #12's "Must show", whatever the timings say (a configuration or
+    // "none").
+    assert!(all.contains("against freeman_sky's default (view_samples=24, sun_samples=8)"), "{all}");
+    assert!(all.contains("freeman_fast at ≤ 1.0× freeman_sky's default time: "), "{all}");
+    assert!(all.contains("freeman_fast at no more than freeman_sky's default's mean, p99 and max error: "), "{all}");
+
+    let csv = std::fs::read_to_string(out.join("bench.csv")).expect("bench.csv written");
+    let lines: Vec<&str> = csv.lines().collect();
+    assert_eq!(lines[0], COLUMNS);
+    let rows = |shader: &str| -> Vec<Vec<&str>> {
+        lines[1..].iter().map(|l| l.split(',').collect::<Vec<_>>()).filter(|c| c[0] == shader).collect()
+    };
+    let (orig_rows, fast_rows) = (rows("freeman_sky"), rows("freeman_fast"));
+    assert_eq!(orig_rows.len() + fast_rows.len(), lines.len() - 1, "{csv}");
+    let views = |rows: &[Vec<&str>]| rows.iter().map(|c| c[1].parse::<i32>().expect("a count")).collect::<Vec<_>>();
+    assert_eq!(views(&orig_rows), [4, 8, 12, 16, 24, 32, 48, 64], "{csv}");
+    assert!(orig_rows.iter().all(|c| c[2] == "8"), "{csv}");
+    assert_eq!(views(&fast_rows), [2, 3, 4, 6, 8, 12, 16, 24, 32, 48, 64], "{csv}");
+    // freeman_fast never reads sun_samples: not swept, its cell empty.
+    assert!(fast_rows.iter().all(|c| c[2].is_empty()), "{csv}");
+    for c in orig_rows.iter().chain(&fast_rows) {
+        let mean: f64 = c[8].parse().expect("mean_rel");
+        assert!(mean.is_finite() && mean > 0.0 && (c[12], c[13]) == ("0", "0"), "{c:?}");
+    }
+    // Each shader has its own front.
+    assert!(orig_rows.iter().any(|c| c[14] == "1") && fast_rows.iter().any(|c| c[14] == "1"), "{csv}");
+    // The fast sky's quadrature is far better at equal samples (against the integral): at 24 view
+    // samples its mean error is below the original's at 64.
+    let mean_at = |rows: &[Vec<&str>], v: &str| rows.iter().find(|c| c[1] == v).map(|c| c[8].parse::<f64>().unwrap());
+    assert!(mean_at(&fast_rows, "24") < mean_at(&orig_rows, "64"), "{csv}");
+    let png = std::fs::read(out.join("bench.png")).expect("bench.png written");
+    assert!(png.starts_with(b"\x89PNG\r\n\x1a\n"), "a PNG");
+}
+
+#[test]
+fn the_integral_truth_cannot_take_sample_counts_and_a_second_scene_is_refused() {
+    let dir = scratch("truth_flags");
+    let out = dir.to_str().unwrap();
+    let o = gdsky(&["bench", "--truth", "integral", "--truth-samples", "64,16", "-o", out], &dir);
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    let scene = dir.join("s.toml");
+    std::fs::write(&scene, "").unwrap();
+    let o = gdsky(&["bench", "fixtures/freeman_sky.gdshader", scene.to_str().unwrap(), "-o", out], &dir);
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    assert!(text(&o).contains("only the first FILE can be a scene file"), "{}", text(&o));
 }

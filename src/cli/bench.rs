@@ -1,10 +1,31 @@
-//! `gdsky bench [FILE]`: render time against error for a Freeman-compatible sky.
+//! `gdsky bench [FILE…]`: render time against error for Freeman-compatible skies.
 //!
-//! Sweeps `view_samples` × `sun_samples` (and any other int uniform given with `--knob`),
-//! renders each configuration on the adapter, times it, and measures it against skyref's
-//! converged f64 image of the same scene (the stand-in for the exact integral of the shader's
-//! model). Writes `bench.csv` and `bench.png` (error against time, log-log, the Pareto front
-//! highlighted) and prints the front.
+//! Sweeps the int uniforms each shader reads (`view_samples` × `sun_samples` by default, and any
+//! other given with `--knob`), renders each configuration on the adapter, times it, and measures
+//! it against the truth of the same scene. Writes `bench.csv` and `bench.png` (error against
+//! time, log-log, each shader in its own colour with its Pareto front) and prints each shader's
+//! front.
+//!
+//! **Several shaders.** `gdsky bench A.gdshader B.gdshader …` puts them on one chart: every
+//! shader is Freeman-compatible, so one material (skyref's parameters) drives them all and one
+//! truth serves them all. A shader sweeps only the knobs it reads
+//! ([`gdsky_naga::reflect::uniforms_read`]): `freeman_fast` declares `sun_samples` for material
+//! compatibility but never reads it, and sweeping it would time the same image four times. A
+//! shader that reads only `view_samples` gets a finer default sweep ([`VIEW_ONLY_SAMPLES`]), since
+//! it has one dimension to spend its configurations on. All configurations of all shaders are
+//! timed in the same interleaved rounds, so the ratios between shaders come from one run on one
+//! machine state. After the fronts, each shader after the first is compared with the first's
+//! default configuration (the uniforms' values: skyref's defaults with the scene's and `--set`
+//! over them): its most accurate configuration at no more than that time, and its fastest
+//! configuration at no more than that mean, p99 and max error.
+//!
+//! **The truth** is [`skyref::truth`] by default: the integrals of the Freeman model evaluated to
+//! about 1e-7 (breakpoints, graded Gauss–Legendre depths, Richardson extrapolation on the view
+//! ray). It does not depend on the sample counts, so every configuration of every shader is
+//! measured against one image. `--truth samples` (implied by `--truth-samples VIEW,SUN`) is the
+//! older truth, the shader's own sums in f64 at many samples ([`skyref::converged`], default
+//! 1024/256): cheaper, but still ~6e-4 mean and ~5e-3 max off the integral, which would hide the
+//! error of a shader better than that.
 //!
 //! Timing is the passes' own time from GPU timestamp queries where the adapter has them
 //! ([`skyrun::Rendered::gpu_time`]; lavapipe does), else wall time from submit to the device
@@ -12,8 +33,8 @@
 //! the median of `--runs` renders after one warm-up render (which also gives the pixels
 //! measured).
 //!
-//! The truth is cached as an EXR (see [`cache_dir`]), keyed by the scene, the image size, the
-//! truth's sample counts and every uniform; an entry is used only when its key file matches
+//! The truth is cached as an EXR (see [`cache_dir`]), keyed by the scene, the image size, which
+//! truth and its settings, and every uniform; an entry is used only when its key file matches
 //! exactly, its pixels match the checksum recorded with them, and a few pixels recomputed now
 //! match it bit for bit. Anything else is recomputed.
 
@@ -23,11 +44,13 @@ use super::scene::{
 };
 use super::sweep::{self, ErrorStats};
 use super::{environment, usage};
-use clap::{ArgMatches, Args};
+use clap::{ArgMatches, Args, ValueEnum};
 use plotters::prelude::*;
 use skyref::converged::Converged;
+use skyref::truth::Truth;
 use skyref::{FreemanParams, Projection, Scene, UniformMut};
 use skyrun::{Image, SkyBuiltins};
+use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Duration;
@@ -36,14 +59,18 @@ use std::time::Duration;
 const VIEW_SAMPLES: [i32; 8] = [4, 8, 12, 16, 24, 32, 48, 64];
 /// The default sweep of `sun_samples`.
 const SUN_SAMPLES: [i32; 4] = [2, 4, 8, 16];
+/// The default sweep of `view_samples` for a shader that reads no other knob: as many
+/// configurations as fit the same decade and a half, about √2 apart.
+const VIEW_ONLY_SAMPLES: [i32; 11] = [2, 3, 4, 6, 8, 12, 16, 24, 32, 48, 64];
 
 #[derive(Args)]
 pub struct BenchArgs {
-    /// The sky shader to benchmark (Freeman-compatible: the Freeman sky's uniforms), or a scene
-    /// file (`SCENE.toml`: its shader, uniforms, sun, camera, projection, size and time; the
-    /// flags given override it); without one, the bundled Freeman sky.
+    /// The sky shaders to benchmark on one chart (Freeman-compatible: the Freeman sky's
+    /// uniforms), the first of them the one the others are compared with; or, first, a scene file
+    /// (`SCENE.toml`: its shader, uniforms, sun, camera, projection, size and time; the flags given
+    /// override it), then more shaders. Without any, the bundled Freeman sky.
     #[arg(value_name = "FILE|SCENE.toml")]
-    file: Option<PathBuf>,
+    files: Vec<PathBuf>,
     /// Bake every uniform the scene file fixes (and every `--set`) into the shader as
     /// constants, except the swept knobs; with no scene file, every uniform but the knobs at its
     /// default.
@@ -63,14 +90,22 @@ pub struct BenchArgs {
     /// reported.
     #[arg(long, value_name = "N", default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1000), allow_hyphen_values = true)]
     runs: u32,
-    /// Sweep an int uniform: `--knob view_samples=4,8,16`. view_samples (4,8,12,16,24,32,48,64)
-    /// and sun_samples (2,4,8,16) are swept by default; a --knob replaces a default list or adds
-    /// a dimension. Values are sample counts, 1 to 4096. Repeatable.
+    /// Sweep an int uniform: `--knob view_samples=4,8,16`. view_samples (4,8,12,16,24,32,48,64;
+    /// 2,3,4,6,8,12,16,24,32,48,64 for a shader that reads no other knob) and sun_samples
+    /// (2,4,8,16) are swept by default, each only in the shaders that read it; a --knob replaces a
+    /// default list or adds a dimension. Values are sample counts, 1 to 4096. Repeatable.
     #[arg(long = "knob", value_name = "NAME=V1,V2,…")]
     knobs: Vec<String>,
-    /// Sample counts of the truth (skyref f64): VIEW,SUN, each 1 to 16384.
-    #[arg(long, value_name = "VIEW,SUN", default_value = "1024,256", value_parser = parse_counts, allow_hyphen_values = true)]
-    truth_samples: (i32, i32),
+    /// The truth the errors are measured against: `integral`, skyref::truth (the Freeman
+    /// model's integrals to about 1e-7), or `samples`, the shader's own sums in f64 at
+    /// --truth-samples (the older, cheaper truth; ~6e-4 mean off the integral) [default:
+    /// integral; samples when --truth-samples is given].
+    #[arg(long, value_enum, value_name = "integral|samples")]
+    truth: Option<TruthArg>,
+    /// Sample counts of the `samples` truth (skyref f64): VIEW,SUN, each 1 to 16384 [default:
+    /// 1024,256]. Implies --truth samples.
+    #[arg(long, value_name = "VIEW,SUN", value_parser = parse_counts, allow_hyphen_values = true)]
+    truth_samples: Option<(i32, i32)>,
     /// Where truth images are cached [default: $GDSKY_CACHE_DIR, else $XDG_CACHE_HOME/gdsky,
     /// else ~/.cache/gdsky, else the temp dir's gdsky-cache].
     #[arg(long, value_name = "DIR")]
@@ -79,6 +114,15 @@ pub struct BenchArgs {
     scene: SceneArgs,
     #[command(flatten)]
     skipping: super::bench_skip::SkippingArgs,
+}
+
+/// `--truth`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum TruthArg {
+    /// skyref::truth: the model's integrals (Richardson-extrapolated), to about 1e-7.
+    Integral,
+    /// skyref::converged: the shader's sums in f64 at --truth-samples.
+    Samples,
 }
 
 /// Largest sample count of the truth (`--truth-samples`): 16× the default view samples; the f64
@@ -97,6 +141,89 @@ fn parse_counts(s: &str) -> Result<(i32, i32), String> {
     Ok((count(a)?, count(b)?))
 }
 
+/// The truth of a bench: which one, with its settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum TruthMode {
+    /// [`skyref::truth`] at these settings.
+    Integral(Truth),
+    /// [`skyref::converged`]: skyref f64 at these sample counts.
+    Samples(Converged),
+}
+
+impl TruthMode {
+    /// From `--truth` and `--truth-samples`; asking for the integral with sample counts is
+    /// wrong input (the counts would be ignored).
+    fn from_args(truth: Option<TruthArg>, samples: Option<(i32, i32)>) -> Result<TruthMode, String> {
+        let converged = |(view_samples, sun_samples)| Converged { view_samples, sun_samples };
+        match (truth, samples) {
+            (Some(TruthArg::Integral), Some(_)) => {
+                Err("--truth-samples sets the `samples` truth; it cannot go with --truth integral".into())
+            }
+            (None | Some(TruthArg::Integral), None) => Ok(TruthMode::Integral(Truth::default())),
+            (None | Some(TruthArg::Samples), Some(counts)) => Ok(TruthMode::Samples(converged(counts))),
+            (Some(TruthArg::Samples), None) => Ok(TruthMode::Samples(Converged::default())),
+        }
+    }
+
+    /// `params` as far as this truth depends on them: the samples truth replaces the sample
+    /// counts with its own; the integral reads no sample count, so they are zeroed and every
+    /// configuration that differs only in them shares one truth (and one cache entry).
+    fn params(&self, params: &FreemanParams) -> FreemanParams {
+        match self {
+            TruthMode::Integral(_) => params.with_samples(0, 0),
+            TruthMode::Samples(c) => c.params(params),
+        }
+    }
+
+    /// The truth's colour in direction `d` (`params` as [`TruthMode::params`] gives them).
+    fn color(&self, params: &FreemanParams, scene: &Scene, d: glam::DVec3) -> glam::DVec3 {
+        match self {
+            TruthMode::Integral(t) => skyref::truth::sky_color(params, scene, d, t),
+            TruthMode::Samples(_) => skyref::f64::sky_color(params, scene, d),
+        }
+    }
+
+    /// The truth's image of one view (rows in parallel).
+    fn render(&self, params: &FreemanParams, scene: &Scene, view: Projection, w: u32, h: u32) -> Vec<[f64; 4]> {
+        match self {
+            TruthMode::Integral(t) => skyref::truth::render(params, scene, view, w, h, t),
+            TruthMode::Samples(_) => skyref::f64::render(params, scene, view, w, h),
+        }
+    }
+
+    /// One line saying what the truth is (progress bar, output).
+    fn describe(&self) -> String {
+        match self {
+            TruthMode::Integral(t) => format!(
+                "skyref::truth, the model's integrals (Richardson on {}/{} view steps per piece, {} depth panels; ~1e-7)",
+                t.view_steps,
+                t.view_steps.saturating_mul(2),
+                t.depth_panels
+            ),
+            TruthMode::Samples(c) => format!(
+                "skyref f64 sums at {}/{} samples (--truth samples: the older truth, ~6e-4 mean off the integral)",
+                c.view_samples, c.sun_samples
+            ),
+        }
+    }
+
+    /// A short name for the chart's axis.
+    fn short(&self) -> String {
+        match self {
+            TruthMode::Integral(_) => "the integral (skyref::truth)".into(),
+            TruthMode::Samples(c) => format!("skyref f64 at {}/{} samples", c.view_samples, c.sun_samples),
+        }
+    }
+
+    /// The cache key's line for the truth: which one and every setting.
+    fn key(&self) -> String {
+        match self {
+            TruthMode::Integral(t) => format!("integral {t:?}"),
+            TruthMode::Samples(c) => format!("samples {c:?}"),
+        }
+    }
+}
+
 /// One image per view (one for a panorama or camera, six cube faces).
 type ViewImages = Vec<Vec<[f32; 4]>>;
 
@@ -109,12 +236,40 @@ struct Knob {
 
 /// One configuration's measurements.
 struct Row {
+    /// Which shader ([`Subject`] index).
+    subject: usize,
     values: Vec<i32>,
     median: Duration,
     min: Duration,
     max: Duration,
     errors: ErrorStats,
     pareto: bool,
+}
+
+/// One shader of the bench and its sweep.
+struct Subject {
+    /// Its name in the CSV's `shader` column, the chart's legend and the comparisons: the file
+    /// stem (the path when two stems are equal).
+    name: String,
+    /// The file; `None`: the bundled Freeman sky.
+    file: Option<PathBuf>,
+    loaded: LoadedShader,
+    /// The knobs it sweeps (those it reads).
+    knobs: Vec<Knob>,
+    /// Its configurations: values of `knobs`.
+    configs: Vec<Vec<i32>>,
+    /// The knobs' values in the base parameters: its default configuration.
+    defaults: Vec<i32>,
+}
+
+impl Subject {
+    /// `values` as `view_samples=12, sun_samples=8` (`its only configuration` without knobs).
+    fn label(&self, values: &[i32]) -> String {
+        if self.knobs.is_empty() {
+            return "its only configuration".into();
+        }
+        self.knobs.iter().zip(values).map(|(k, v)| format!("{}={v}", k.name)).collect::<Vec<_>>().join(", ")
+    }
 }
 
 pub fn run(args: &BenchArgs, matches: &ArgMatches) -> ExitCode {
@@ -153,6 +308,24 @@ fn knobs(args: &[String]) -> Result<Vec<Knob>, String> {
     Ok(knobs)
 }
 
+/// The knobs a shader sweeps: those of `all` it reads. When that leaves `view_samples` alone
+/// and no `--knob` set its values (`given`), its finer default sweep.
+fn knobs_read(all: &[Knob], read: &BTreeSet<String>, given: &[String]) -> Vec<Knob> {
+    let mut kept: Vec<Knob> = all.iter().filter(|k| read.contains(&k.name)).cloned().collect();
+    if let [only] = kept.as_mut_slice()
+        && only.name == "view_samples"
+        && !given.iter().any(|g| g == "view_samples")
+    {
+        only.values = VIEW_ONLY_SAMPLES.to_vec();
+    }
+    kept
+}
+
+/// The knob names `--knob` gave.
+fn given_knobs(args: &[String]) -> Vec<String> {
+    args.iter().filter_map(|a| a.split_once('=')).map(|(n, _)| n.trim().to_string()).collect()
+}
+
 /// Every combination of the knobs' values, the first knob varying slowest.
 fn combinations(knobs: &[Knob]) -> Vec<Vec<i32>> {
     knobs.iter().fold(vec![Vec::new()], |acc, knob| {
@@ -183,6 +356,26 @@ fn with_knobs(base: &FreemanParams, knobs: &[Knob], values: &[i32]) -> Result<Fr
         params.set(&knob.name, &value.to_string())?;
     }
     Ok(params)
+}
+
+/// Short, unique names for the shaders: file stems, or the full path where two stems are equal.
+fn subject_names(files: &[Option<PathBuf>]) -> Vec<String> {
+    let stem = |f: &Option<PathBuf>| match f {
+        Some(p) => p.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| p.display().to_string()),
+        None => "freeman_sky (bundled)".into(),
+    };
+    let stems: Vec<String> = files.iter().map(stem).collect();
+    files
+        .iter()
+        .zip(&stems)
+        .map(|(f, s)| {
+            if stems.iter().filter(|t| *t == s).count() > 1 {
+                f.as_ref().map(|p| p.display().to_string()).unwrap_or_else(|| s.clone())
+            } else {
+                s.clone()
+            }
+        })
+        .collect()
 }
 
 /// The material block of a Freeman-compatible shader from skyref's parameters, leaving out the
@@ -259,60 +452,46 @@ fn uniform_text(value: skyrun::UniformValue) -> String {
     }
 }
 
-fn bench(args: &BenchArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
-    let input = open_input(args.file.as_deref())?;
-    let mut scene_args = args.scene.clone();
-    if let Some(file) = &input.scene {
-        scene_args.merge_file(file, matches);
-        super::render::warn_unapplied(file, "bench");
-    }
-    let args = &BenchArgs {
-        file: input.shader.clone(),
-        scene: scene_args,
-        knobs: args.knobs.clone(),
-        out_dir: args.out_dir.clone(),
-        cache_dir: args.cache_dir.clone(),
-        skipping: args.skipping.clone(),
-        overrides: args.overrides.clone(),
-        ..*args
-    };
-    let (views, width, height) = args.scene.views().map_err(usage)?;
-    let mut base = FreemanParams::default();
-    set_freeman(&mut base, &args.scene.overrides().map_err(usage)?).map_err(usage)?;
-    let knobs = knobs(&args.knobs).map_err(usage)?;
-    let configs = combinations(&knobs);
-    if configs.is_empty() {
-        return Err(usage("the sweep is empty"));
-    }
-    super::check_output_dir(&args.out_dir, true, &["bench.csv", "bench.png"])?;
-    let cli_sets = super::scene::SceneArgs::overrides(&args.scene).map_err(usage)?;
-    let override_names = override_names(input.scene.as_ref(), &args.overrides);
-    check_override_conflicts(&override_names, input.scene.as_ref(), |n| {
-        if knobs.iter().any(|k| k.name == n) {
-            None
-        } else {
-            bake_reason(n, input.scene.as_ref(), &cli_sets, args.bake_scene)
-        }
-    })?;
-    let mut loaded = sweep::load_freeman(args.file.as_deref())?;
-    check_scene_uniforms(input.scene.as_ref(), &loaded)?;
+/// One configuration of one shader, as the timing loop sees it.
+struct Entry {
+    subject: usize,
+    values: Vec<i32>,
+    material: Vec<u8>,
+    /// Index into the subject's compiled shaders.
+    shader: usize,
+    /// The truth's parameters ([`TruthMode::params`]).
+    truth_params: FreemanParams,
+}
+
+/// Bakes what `--bake-scene` asks into `loaded` and makes `override_names` overrides: the
+/// values the material would carry (skyref's defaults with the scene's uniforms and --set over
+/// them), so the truth still matches: with a scene file, the uniforms it fixes and those --set;
+/// without one, every uniform; never a knob.
+fn specialize(
+    loaded: &mut LoadedShader,
+    bake_scene: bool,
+    cli_sets: &[(String, String)],
+    scene_file: Option<&gdsky::scene::SceneFile>,
+    base: &FreemanParams,
+    all_knobs: &[Knob],
+    override_names: &[String],
+) -> Result<(), ExitCode> {
     let mut baked = std::collections::HashMap::new();
-    if args.bake_scene {
-        // The values baked are the ones the material would carry (skyref's defaults with the
-        // scene's uniforms and --set over them), so the truth still matches: with a scene file,
-        // the uniforms it fixes and those --set; without one, every uniform; never a knob.
-        let cli_sets = super::scene::SceneArgs::overrides(&args.scene).map_err(usage)?;
-        let fixed: Vec<String> = match &input.scene {
-            Some(file) => {
-                file.uniform_pairs().into_iter().map(|(n, _)| n).chain(cli_sets.into_iter().map(|(n, _)| n)).collect()
-            }
+    if bake_scene {
+        let fixed: Vec<String> = match scene_file {
+            Some(file) => file
+                .uniform_pairs()
+                .into_iter()
+                .map(|(n, _)| n)
+                .chain(cli_sets.iter().map(|(n, _)| n.clone()))
+                .collect(),
             None => sweep::freeman_names().into_iter().map(String::from).collect(),
         };
-        baked = skyrun::freeman_values(&base)
+        baked = skyrun::freeman_values(base)
             .into_iter()
             .filter(|(name, _)| {
                 fixed.iter().any(|f| f == name)
-                    && !knobs.iter().any(|k| k.name == *name)
+                    && !all_knobs.iter().any(|k| k.name == *name)
                     && !override_names.iter().any(|o| o == name)
             })
             .map(|(name, value)| (name.to_string(), uniform_text(value)))
@@ -325,60 +504,124 @@ fn bench(args: &BenchArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
             names.iter().map(|n| n.as_str()).collect::<Vec<_>>().join(", ")
         );
     }
-    if args.bake_scene || !override_names.is_empty() {
-        loaded.respecialize(baked, &override_names)?;
+    if bake_scene || !override_names.is_empty() {
+        loaded.respecialize(baked, override_names)?;
+    }
+    Ok(())
+}
+
+fn bench(args: &BenchArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
+    let input = open_input(args.files.first().map(PathBuf::as_path))?;
+    let mut files = vec![input.shader.clone()];
+    for file in args.files.iter().skip(1) {
+        if gdsky::scene::is_scene_path(file) {
+            return Err(usage(format!(
+                "{}: only the first FILE can be a scene file; the others are shaders",
+                file.display()
+            )));
+        }
+        files.push(open_input(Some(file))?.shader);
+    }
+    let mut scene_args = args.scene.clone();
+    if let Some(file) = &input.scene {
+        scene_args.merge_file(file, matches);
+        super::render::warn_unapplied(file, "bench");
+    }
+    let scene_args = &scene_args;
+    let truth_mode = TruthMode::from_args(args.truth, args.truth_samples).map_err(usage)?;
+    let (views, width, height) = scene_args.views().map_err(usage)?;
+    let mut base = FreemanParams::default();
+    set_freeman(&mut base, &scene_args.overrides().map_err(usage)?).map_err(usage)?;
+    let all_knobs = knobs(&args.knobs).map_err(usage)?;
+    let given = given_knobs(&args.knobs);
+    super::check_output_dir(&args.out_dir, true, &["bench.csv", "bench.png"])?;
+    let cli_sets = super::scene::SceneArgs::overrides(scene_args).map_err(usage)?;
+    let override_names = override_names(input.scene.as_ref(), &args.overrides);
+    check_override_conflicts(&override_names, input.scene.as_ref(), |n| {
+        if all_knobs.iter().any(|k| k.name == n) {
+            None
+        } else {
+            bake_reason(n, input.scene.as_ref(), &cli_sets, args.bake_scene)
+        }
+    })?;
+
+    let names = subject_names(&files);
+    let mut subjects = Vec::with_capacity(files.len());
+    for (file, name) in files.iter().zip(names) {
+        let mut loaded = sweep::load_freeman(file.as_deref())?;
+        check_scene_uniforms(input.scene.as_ref(), &loaded)?;
+        // Which knobs the shader reads, from the generic module (before any baking).
+        let read = gdsky_naga::reflect::uniforms_read(&loaded.lowered);
+        let knobs = knobs_read(&all_knobs, &read, &given);
+        let skipped: Vec<&str> =
+            all_knobs.iter().filter(|k| !read.contains(&k.name)).map(|k| k.name.as_str()).collect();
+        if !skipped.is_empty() {
+            eprintln!("note: {name} declares but never reads {}: not swept", skipped.join(", "));
+        }
+        specialize(&mut loaded, args.bake_scene, &cli_sets, input.scene.as_ref(), &base, &all_knobs, &override_names)?;
+        let mut configs = combinations(&knobs);
+        let defaults: Vec<i32> = knobs.iter().filter_map(|k| int_value(&base, &k.name)).collect();
+        // The comparisons need the first shader's default measured: added when the sweep
+        // misses it.
+        if subjects.is_empty() && files.len() > 1 && !configs.contains(&defaults) {
+            configs.push(defaults.clone());
+        }
+        if configs.is_empty() {
+            return Err(usage(format!("{name}: the sweep is empty")));
+        }
+        subjects.push(Subject { name, file: file.clone(), loaded, knobs, configs, defaults });
     }
     if !override_names.is_empty() {
         eprintln!("overrides: {}", override_names.join(", "));
     }
-    let shader_name = args.file.as_ref().map(|f| f.display().to_string()).unwrap_or("freeman_sky (bundled)".into());
+    let shader_names = subjects.iter().map(|s| s.name.as_str()).collect::<Vec<_>>().join(" vs ");
     let gpu = open_gpu()?;
     let adapter = gpu.adapter_info();
     let timer = if gpu.has_timestamps() { "gpu_timestamps" } else { "wall" };
-    let scene = args.scene.scene();
+    let scene = scene_args.scene();
     let mut builtins = SkyBuiltins::from_scene(&scene, width, height);
-    builtins.time = args.scene.time;
-    let converged = Converged { view_samples: args.truth_samples.0, sun_samples: args.truth_samples.1 };
+    builtins.time = scene_args.time;
 
-    let bar = sweep::progress_bar(1 + configs.len() as u64 * (1 + u64::from(args.runs)));
-    bar.set_message(format!(
-        "truth: skyref f64 at {}/{} samples (cached after the first run)",
-        converged.view_samples, converged.sun_samples
-    ));
+    // Every configuration of every shader, in one list: the timing rounds go over all of them.
+    let mut entries = Vec::new();
+    let mut compiled: Vec<Compiled> = Vec::with_capacity(subjects.len());
+    for (i, s) in subjects.iter().enumerate() {
+        let mut c = Compiled { shaders: Vec::new() };
+        for values in &s.configs {
+            let params = with_knobs(&base, &s.knobs, values).map_err(usage)?;
+            let material = material(&s.loaded, &params).map_err(|e| usage(e.to_string()))?;
+            // Each configuration's pipelines carry its override values: a module compiled per
+            // distinct set (before any timing), so switching configurations in the round-robin
+            // rebuilds nothing.
+            let shader = c.index(&s.loaded, &gpu, constants(&s.loaded, &params))?;
+            entries.push(Entry {
+                subject: i,
+                values: values.clone(),
+                material,
+                shader,
+                truth_params: truth_mode.params(&params),
+            });
+        }
+        compiled.push(c);
+    }
+    let base_shader = compiled[0].index(&subjects[0].loaded, &gpu, constants(&subjects[0].loaded, &base))?;
+
+    let bar = sweep::progress_bar(1 + entries.len() as u64 * (1 + u64::from(args.runs)));
+    bar.set_message(format!("truth: {} (cached after the first run)", truth_mode.describe()));
     bar.enable_steady_tick(Duration::from_millis(200));
-    let truth_params: Vec<FreemanParams> = configs
-        .iter()
-        .map(|values| with_knobs(&base, &knobs, values).map(|p| converged.params(&p)))
-        .collect::<Result<_, _>>()
-        .map_err(usage)?;
     let cache = args.cache_dir.clone().unwrap_or_else(cache_dir);
     let mut truths: Vec<(FreemanParams, Vec<[f64; 4]>)> = Vec::new();
-    for params in &truth_params {
-        // Only the knobs other than the sample counts change the truth; most sweeps share one.
-        if truths.iter().any(|(p, _)| p == params) {
+    for e in &entries {
+        // Only knobs other than the sample counts change the truth; most sweeps share one.
+        if truths.iter().any(|(p, _)| *p == e.truth_params) {
             continue;
         }
-        let (image, note) = cached_truth(&cache, params, &scene, &views, width, height);
+        let (image, note) = cached_truth(&cache, &truth_mode, &e.truth_params, &scene, &views, width, height);
         bar.suspend(|| eprintln!("{note}"));
-        truths.push((*params, sweep::widen(&image.pixels)));
+        truths.push((e.truth_params, sweep::widen(&image.pixels)));
     }
     bar.inc(1);
 
-    let params: Vec<FreemanParams> =
-        configs.iter().map(|values| with_knobs(&base, &knobs, values)).collect::<Result<_, _>>().map_err(usage)?;
-    let materials: Vec<Vec<u8>> = params
-        .iter()
-        .map(|p| material(&loaded, p).map_err(|e| e.to_string()))
-        .collect::<Result<_, _>>()
-        .map_err(usage)?;
-    // Each configuration's pipelines carry its override values: a module compiled per distinct
-    // set (before any timing), so switching configurations in the round-robin rebuilds nothing.
-    let mut compiled = Compiled { shaders: Vec::new() };
-    let shader_of: Vec<usize> =
-        params.iter().map(|p| compiled.index(&loaded, &gpu, constants(&loaded, p))).collect::<Result<_, _>>()?;
-    let base_shader = compiled.index(&loaded, &gpu, constants(&loaded, &base))?;
-    let shaders: Vec<&skyrun::SkyShader> = compiled.shaders.iter().map(|(_, s)| s).collect();
-    let label = |values: &[i32]| values.iter().map(i32::to_string).collect::<Vec<_>>().join("/");
     let render_all = |shader: &skyrun::SkyShader, material: &[u8]| -> Result<(ViewImages, Duration), ExitCode> {
         let mut images = Vec::with_capacity(views.len());
         let mut time = Duration::ZERO;
@@ -394,57 +637,78 @@ fn bench(args: &BenchArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
         }
         Ok((images, time))
     };
+    let shader_of = |e: &Entry| &compiled[e.subject].shaders[e.shader].1;
     // First every configuration's warm-up render, which pays for the driver's pipeline
     // compilation; its pixels are the ones measured (every render of a configuration gives the
     // same pixels).
-    let mut errors = Vec::with_capacity(configs.len());
-    for (i, ((values, material), truth_params)) in configs.iter().zip(&materials).zip(&truth_params).enumerate() {
-        bar.set_message(format!("{}: warm-up render and error", label(values)));
-        let (images, _) = render_all(shaders[shader_of[i]], material)?;
+    let mut errors = Vec::with_capacity(entries.len());
+    for e in &entries {
+        let s = &subjects[e.subject];
+        bar.set_message(format!("{}: {}: warm-up render and error", s.name, s.label(&e.values)));
+        let (images, _) = render_all(shader_of(e), &e.material)?;
         let image = strip(images, width, height).map_err(usage)?;
-        let truth = &truths.iter().find(|(p, _)| p == truth_params).ok_or(ExitCode::from(1))?.1;
+        let truth = &truths.iter().find(|(p, _)| *p == e.truth_params).ok_or(ExitCode::from(1))?.1;
         errors.push(sweep::error_stats(&image.pixels, truth));
         bar.inc(1);
     }
-    // Then the timed renders, round-robin over the configurations: a burst of load from
-    // elsewhere on the machine spreads over all of them instead of spoiling one's median.
-    let mut times = vec![Vec::with_capacity(args.runs as usize); configs.len()];
+    // Then the timed renders, round-robin over the configurations of all shaders: a burst of
+    // load from elsewhere on the machine spreads over all of them instead of spoiling one's
+    // median, and the shaders' ratios come from the same rounds.
+    let mut times = vec![Vec::with_capacity(args.runs as usize); entries.len()];
     for run in 0..args.runs {
         bar.set_message(format!("timing: round {} of {} on {}", run + 1, args.runs, adapter.name));
-        for (i, (material, times)) in materials.iter().zip(&mut times).enumerate() {
-            times.push(render_all(shaders[shader_of[i]], material)?.1);
+        for (e, times) in entries.iter().zip(&mut times) {
+            times.push(render_all(shader_of(e), &e.material)?.1);
             bar.inc(1);
         }
     }
-    let mut rows: Vec<Row> = configs
+    let mut rows: Vec<Row> = entries
         .iter()
         .zip(errors)
         .zip(&mut times)
-        .map(|((values, errors), times)| {
+        .map(|((e, errors), times)| {
             times.sort();
             // The median; of an even count, the mean of the middle two.
             let n = times.len();
             let median = (times[(n - 1) / 2] + times[n / 2]) / 2;
-            Row { values: values.clone(), median, min: times[0], max: times[n - 1], errors, pareto: false }
+            Row {
+                subject: e.subject,
+                values: e.values.clone(),
+                median,
+                min: times[0],
+                max: times[n - 1],
+                errors,
+                pareto: false,
+            }
         })
         .collect();
     bar.finish_and_clear();
-    mark_pareto(&mut rows);
+    // Each shader's own front: the rows are grouped by shader, in order.
+    for i in 0..subjects.len() {
+        let start = rows.iter().position(|r| r.subject == i).unwrap_or(rows.len());
+        let end = start + rows[start..].iter().take_while(|r| r.subject == i).count();
+        mark_pareto(&mut rows[start..end]);
+    }
 
     let csv_path = args.out_dir.join("bench.csv");
-    let csv = csv_text(&knobs, &rows, args.runs, timer);
+    let csv = csv_text(&subjects, &rows, args.runs, timer);
     super::create_output_dir(&args.out_dir)?;
     super::write_file(&csv_path, csv.as_bytes()).map_err(environment)?;
     let png_path = args.out_dir.join("bench.png");
 
     println!(
-        "gdsky bench: {shader_name}, {} configurations, {width}x{height} {}",
+        "gdsky bench: {}, {} configurations, {width}x{height} {}",
+        subjects
+            .iter()
+            .map(|s| s.file.as_ref().map(|f| f.display().to_string()).unwrap_or(super::scene::BUNDLED_NAME.into()))
+            .collect::<Vec<_>>()
+            .join(", "),
         rows.len(),
-        projection_name(&args.scene)
+        projection_name(scene_args)
     );
     println!("adapter  {adapter}");
     println!(
-        "timer    {}, median of {} after a warm-up",
+        "timer    {}, median of {} after a warm-up, all shaders in the same interleaved rounds",
         if timer == "wall" {
             "wall time submit → idle (the adapter has no timestamp queries)"
         } else {
@@ -452,27 +716,34 @@ fn bench(args: &BenchArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
         },
         args.runs
     );
-    println!(
-        "truth    skyref f64, {}/{} samples; error = |gdsky − truth| / max(|truth|, {:e}) over RGB",
-        converged.view_samples,
-        converged.sun_samples,
-        sweep::FLOOR
-    );
-    println!("Pareto front (no other configuration both faster and more accurate):");
-    print!("{}", front_table(&knobs, &rows));
+    println!("truth    {}; error = |gdsky − truth| / max(|truth|, {:e}) over RGB", truth_mode.describe(), sweep::FLOOR);
+    for (i, s) in subjects.iter().enumerate() {
+        let swept = if s.knobs.is_empty() {
+            "no knob".to_string()
+        } else {
+            s.knobs.iter().map(|k| k.name.as_str()).collect::<Vec<_>>().join(" × ")
+        };
+        println!("Pareto front of {} ({swept}; no other configuration of it both faster and more accurate):", s.name);
+        let mine: Vec<&Row> = rows.iter().filter(|r| r.subject == i).collect();
+        print!("{}", front_table(&s.knobs, &mine));
+    }
+    for line in comparisons(&subjects, &rows) {
+        println!("{line}");
+    }
     let mut reduced = Vec::new();
     if args.skipping.skipping {
-        let base_material = material(&loaded, &base).map_err(|e| usage(e.to_string()))?;
+        let first = &subjects[0];
+        let base_material = material(&first.loaded, &base).map_err(|e| usage(e.to_string()))?;
         // The `uniforms` rows: the named overrides, else the swept knobs, as a generic module
         // (material block), baked into constants, and as overrides, each at the base values.
         let varied: Vec<String> = if override_names.is_empty() {
-            knobs.iter().map(|k| k.name.clone()).collect()
+            first.knobs.iter().map(|k| k.name.clone()).collect()
         } else {
             override_names.clone()
         };
         let mut modules = Vec::new();
         for kind in ["generic", "baked", "overrides"] {
-            let mut m = sweep::load_freeman(args.file.as_deref())?;
+            let mut m = sweep::load_freeman(first.file.as_deref())?;
             match kind {
                 "baked" => {
                     let values = skyrun::freeman_values(&base)
@@ -489,12 +760,12 @@ fn bench(args: &BenchArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
             let s = m.compile(&gpu)?.with_constants(constants(&m, &base));
             modules.push((kind, s, mat));
         }
-        let base_truth = converged.params(&base);
+        let base_truth = truth_mode.params(&base);
         let truth = truths.iter().find(|(p, _)| *p == base_truth).or(truths.first()).ok_or(ExitCode::from(1))?;
         let cx = super::bench_skip::Context {
             gpu: &gpu,
-            shader: shaders[base_shader],
-            name: shader_name.clone(),
+            shader: &compiled[0].shaders[base_shader].1,
+            name: first.name.clone(),
             modules: modules.iter().map(|(k, s, m)| (*k, s, m.as_slice())).collect(),
             views: &views,
             width,
@@ -505,7 +776,7 @@ fn bench(args: &BenchArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
             runs: args.runs,
         };
         let rows = super::bench_skip::run(&cx, &args.skipping)?;
-        println!("skipping (the shader's defaults; occluder ratio = time / time at 0 %, resolution = speed-up):");
+        println!("skipping ({}'s defaults; occluder ratio = time / time at 0 %, resolution = speed-up):", first.name);
         print!("{}", super::bench_skip::table(&rows));
         println!(
             "uniforms rows: {} read from the material block (generic), baked into constants (baked), as \
@@ -517,11 +788,94 @@ fn bench(args: &BenchArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
         println!("wrote    {}", path.display());
         reduced = reduced_points(&rows);
     }
-    let title = format!("{shader_name} on {}: {}x{} {}", adapter.name, width, height, projection_name(&args.scene));
-    let defaults: Vec<i32> = knobs.iter().filter_map(|k| int_value(&base, &k.name)).collect();
-    plot(&png_path, &title, &rows, &knobs, &defaults, &reduced, timer).map_err(environment)?;
+    let title = format!("{shader_names} on {}: {}x{} {}", adapter.name, width, height, projection_name(scene_args));
+    plot(&png_path, &title, &subjects, &rows, &reduced, timer, &truth_mode).map_err(environment)?;
     println!("wrote    {} and {}", csv_path.display(), png_path.display());
     Ok(())
+}
+
+/// The comparisons of each shader after the first with the first's default configuration: the
+/// two lines issue #12 asks for. (i) Its lowest-mean-error configuration at no more than that
+/// time, with mean/p99/max against the default's; (ii) its fastest configuration whose mean,
+/// p99 and max error are all no more than the default's, with the speed-up. Configurations with
+/// NaN/Inf never qualify. Empty with one shader, or when the first's default was not measured.
+fn comparisons(subjects: &[Subject], rows: &[Row]) -> Vec<String> {
+    let Some(first) = subjects.first() else { return Vec::new() };
+    let finite = |r: &&Row| r.errors.nan + r.errors.inf == 0 && r.errors.channels > 0;
+    let Some(base) = rows.iter().filter(finite).find(|r| r.subject == 0 && r.values == first.defaults) else {
+        return Vec::new();
+    };
+    let b = &base.errors;
+    let mut out = vec![format!(
+        "against {}'s default ({}): {:.3} ms, mean {:.3e}, p99 {:.3e}, max {:.3e}",
+        first.name,
+        first.label(&first.defaults),
+        ms(base.median),
+        b.mean,
+        b.p99,
+        b.max
+    )];
+    for (i, s) in subjects.iter().enumerate().skip(1) {
+        let mine: Vec<&Row> = rows.iter().filter(|r| r.subject == i).filter(finite).collect();
+        let best = mine
+            .iter()
+            .filter(|r| r.median <= base.median)
+            .min_by(|a, b| a.errors.mean.total_cmp(&b.errors.mean).then(a.median.cmp(&b.median)));
+        out.push(match best {
+            Some(r) => format!(
+                "  {} at ≤ 1.0× {}'s default time: {} ({:.3} ms, {:.2}×): mean {:.3e} / p99 {:.3e} / max {:.3e} \
+                 against {:.3e} / {:.3e} / {:.3e} ({:.3}× / {:.3}× / {:.3}×)",
+                s.name,
+                first.name,
+                s.label(&r.values),
+                ms(r.median),
+                ratio(r.median, base.median),
+                r.errors.mean,
+                r.errors.p99,
+                r.errors.max,
+                b.mean,
+                b.p99,
+                b.max,
+                r.errors.mean / b.mean,
+                r.errors.p99 / b.p99,
+                r.errors.max / b.max
+            ),
+            None => {
+                format!("  {} at ≤ 1.0× {}'s default time: none of its configurations is that fast", s.name, first.name)
+            }
+        });
+        let cheapest = mine
+            .iter()
+            .filter(|r| r.errors.mean <= b.mean && r.errors.p99 <= b.p99 && r.errors.max <= b.max)
+            .min_by(|a, b| a.median.cmp(&b.median).then(a.errors.mean.total_cmp(&b.errors.mean)));
+        out.push(match cheapest {
+            Some(r) => format!(
+                "  {} at no more than {}'s default's mean, p99 and max error: {} ({:.3} ms; mean {:.3e} / p99 {:.3e} / \
+                 max {:.3e}): {:.2}× faster",
+                s.name,
+                first.name,
+                s.label(&r.values),
+                ms(r.median),
+                r.errors.mean,
+                r.errors.p99,
+                r.errors.max,
+                ratio(base.median, r.median)
+            ),
+            None => format!(
+                "  {} at no more than {}'s default's mean, p99 and max error: none of its configurations is that accurate",
+                s.name, first.name
+            ),
+        });
+    }
+    if subjects.len() < 2 {
+        out.clear();
+    }
+    out
+}
+
+/// `a / b` of two durations (∞ for a zero `b`).
+fn ratio(a: Duration, b: Duration) -> f64 {
+    a.as_secs_f64() / b.as_secs_f64()
 }
 
 /// The bench shader's reduced sky resolutions with the default (bilinear) upsampling, as
@@ -564,20 +918,34 @@ fn ms(d: Duration) -> f64 {
     d.as_secs_f64() * 1e3
 }
 
-/// The CSV: one row per configuration. Columns: the knobs (view_samples, sun_samples, …),
-/// time_ms (median), time_min_ms, time_max_ms, runs, timer (`gpu_timestamps`: the passes on the
+/// The CSV: one row per configuration of each shader. Columns: shader (its name), the knobs of
+/// all shaders (view_samples, sun_samples, …; empty where the shader does not sweep one: it never
+/// reads it), time_ms (median), time_min_ms, time_max_ms, runs, timer (`gpu_timestamps`: the passes on the
 /// device; `wall`: submit → idle), mean_rel,
 /// p99_rel, max_rel (relative error in linear radiance against the truth, floor 1e-4),
 /// mean_abs_tonemapped (mean |Δ| after the preview's tone map), nan, inf (channels of gdsky's
 /// image), pareto (1 on the front).
-fn csv_text(knobs: &[Knob], rows: &[Row], runs: u32, timer: &str) -> String {
-    let mut out: String = knobs.iter().map(|k| format!("{},", k.name)).collect();
+fn csv_text(subjects: &[Subject], rows: &[Row], runs: u32, timer: &str) -> String {
+    let mut names: Vec<&str> = Vec::new();
+    for k in subjects.iter().flat_map(|s| &s.knobs) {
+        if !names.contains(&k.name.as_str()) {
+            names.push(&k.name);
+        }
+    }
+    let mut out = String::from("shader,");
+    out.extend(names.iter().map(|n| format!("{n},")));
     out.push_str(
         "time_ms,time_min_ms,time_max_ms,runs,timer,mean_rel,p99_rel,max_rel,mean_abs_tonemapped,nan,inf,pareto\n",
     );
     for r in rows {
-        for v in &r.values {
-            out.push_str(&format!("{v},"));
+        let s = &subjects[r.subject];
+        out.push_str(&csv_field(&s.name));
+        out.push(',');
+        for name in &names {
+            if let Some(v) = s.knobs.iter().position(|k| k.name == *name).and_then(|i| r.values.get(i)) {
+                out.push_str(&v.to_string());
+            }
+            out.push(',');
         }
         let e = &r.errors;
         out.push_str(&format!(
@@ -597,11 +965,20 @@ fn csv_text(knobs: &[Knob], rows: &[Row], runs: u32, timer: &str) -> String {
     out
 }
 
-/// The front as a text table, fastest first.
-fn front_table(knobs: &[Knob], rows: &[Row]) -> String {
-    let mut front: Vec<&Row> = rows.iter().filter(|r| r.pareto).collect();
+/// A CSV field: quoted (quotes doubled) when it holds a comma, a quote or a line break.
+fn csv_field(text: &str) -> String {
+    if text.contains([',', '"', '\n', '\r']) { format!("\"{}\"", text.replace('"', "\"\"")) } else { text.to_string() }
+}
+
+/// One shader's front as a text table, fastest first.
+fn front_table(knobs: &[Knob], rows: &[&Row]) -> String {
+    let mut front: Vec<&Row> = rows.iter().copied().filter(|r| r.pareto).collect();
     front.sort_by_key(|r| r.median);
-    let head = knobs.iter().map(|k| k.name.as_str()).collect::<Vec<_>>().join("/");
+    let head = if knobs.is_empty() {
+        "(no knob)".to_string()
+    } else {
+        knobs.iter().map(|k| k.name.as_str()).collect::<Vec<_>>().join("/")
+    };
     let mut out = format!(
         "  {head:<26} {:>9} {:>10} {:>10} {:>10} {:>12}\n",
         "time ms", "mean_rel", "p99_rel", "max_rel", "tonemapped"
@@ -621,28 +998,35 @@ fn front_table(knobs: &[Knob], rows: &[Row]) -> String {
     out
 }
 
-/// Draws mean relative error against median time, log-log: every configuration grey, the
-/// Pareto front red, connected and labelled with its knob values; the configuration with the
-/// uniforms' default values (`defaults`, when swept) ringed in black; `reduced` (from
-/// `--skipping`: the defaults at a reduced sky resolution, labelled) blue diamonds.
+/// Colours of the shaders on the chart, in order (the first is the old chart's red).
+const PALETTE: [RGBColor; 6] = [
+    RGBColor(200, 30, 30),
+    RGBColor(30, 90, 200),
+    RGBColor(20, 140, 60),
+    RGBColor(210, 120, 0),
+    RGBColor(130, 50, 170),
+    RGBColor(0, 150, 160),
+];
+
+/// Draws mean relative error against median time, log-log: each shader's configurations as
+/// light dots in its colour, its Pareto front connected in its colour and labelled with the knob
+/// values; each shader's default configuration ringed in black; `reduced` (from `--skipping`: the
+/// first shader's defaults at a reduced sky resolution, labelled) dark grey diamonds.
 fn plot(
     path: &Path,
     title: &str,
+    subjects: &[Subject],
     rows: &[Row],
-    knobs: &[Knob],
-    defaults: &[i32],
     reduced: &[(f64, f64, String)],
     timer: &str,
+    truth: &TruthMode,
 ) -> Result<(), String> {
     sweep::register_fonts();
     let (w, h) = (960u32, 640u32);
     let mut rgb = vec![255u8; (w * h * 3) as usize];
-    let points: Vec<(f64, f64)> = rows
-        .iter()
-        .filter(|r| r.errors.channels > 0 && r.errors.mean > 0.0)
-        .map(|r| (ms(r.median).max(1e-3), r.errors.mean))
-        .collect();
-    let all = || points.iter().copied().chain(reduced.iter().map(|p| (p.0, p.1)));
+    let drawable = |r: &&Row| r.errors.channels > 0 && r.errors.mean > 0.0;
+    let point = |r: &Row| (ms(r.median).max(1e-3), r.errors.mean);
+    let all = || rows.iter().filter(drawable).map(point).chain(reduced.iter().map(|p| (p.0, p.1)));
     let bounds = |values: Vec<f64>| {
         let lo = values.iter().copied().fold(f64::INFINITY, f64::min);
         let hi = values.iter().copied().fold(0.0, f64::max);
@@ -658,16 +1042,6 @@ fn plot(
     };
     let (x0, x1) = bounds(all().map(|p| p.0).collect());
     let (y0, y1) = bounds(all().map(|p| p.1).collect());
-    let mut front: Vec<(f64, f64, String)> = rows
-        .iter()
-        .filter(|r| r.pareto && r.errors.mean > 0.0)
-        .map(|r| {
-            let label = r.values.iter().map(i32::to_string).collect::<Vec<_>>().join("/");
-            (ms(r.median).max(1e-3), r.errors.mean, label)
-        })
-        .collect();
-    front.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let knob_names = knobs.iter().map(|k| k.name.as_str()).collect::<Vec<_>>().join("/");
     let err = |e: &dyn std::fmt::Display| format!("cannot draw {}: {e}", path.display());
     {
         let root = BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area();
@@ -686,63 +1060,86 @@ fn plot(
             } else {
                 "render time, ms (median, GPU timestamps around the passes)"
             })
-            .y_desc("mean relative error vs converged f64")
+            .y_desc(format!("mean relative error vs {}", truth.short()))
             .y_label_formatter(&|v| format!("{v:.0e}"))
             .x_label_formatter(&|v| tick(*v))
             .label_style(("sans-serif", 15))
             .axis_desc_style(("sans-serif", 16))
             .draw()
             .map_err(|e| err(&e))?;
-        let grey = RGBColor(150, 150, 150);
-        chart
-            .draw_series(points.iter().map(|&p| Circle::new(p, 4, grey.filled())))
-            .map_err(|e| err(&e))?
-            .label(format!("all {} ({knob_names})", points.len()))
-            .legend(move |(x, y)| Circle::new((x + 10, y), 4, grey.filled()));
-        let red = RGBColor(200, 30, 30);
-        chart
-            .draw_series(LineSeries::new(front.iter().map(|p| (p.0, p.1)), red.stroke_width(2)))
-            .map_err(|e| err(&e))?
-            .label(format!("Pareto front ({knob_names})"))
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], red.stroke_width(2)));
-        // The ring first, so that a front label next to it stays readable on top.
-        let default_point = rows
-            .iter()
-            .find(|r| r.values == defaults && r.errors.mean > 0.0)
-            .map(|r| (ms(r.median).max(1e-3), r.errors.mean));
-        if let Some(point) = default_point {
-            let label = defaults.iter().map(i32::to_string).collect::<Vec<_>>().join("/");
+        let mut fronts = Vec::new();
+        for (i, s) in subjects.iter().enumerate() {
+            let colour = PALETTE[i % PALETTE.len()];
+            let light = colour.mix(0.35);
+            let mine: Vec<&Row> = rows.iter().filter(|r| r.subject == i).filter(drawable).collect();
+            let knob_names = if s.knobs.is_empty() {
+                "no knob".to_string()
+            } else {
+                s.knobs.iter().map(|k| k.name.as_str()).collect::<Vec<_>>().join("/")
+            };
             chart
-                .draw_series([Circle::new(point, 9, BLACK.stroke_width(2))])
+                .draw_series(mine.iter().map(|r| Circle::new(point(r), 4, light.filled())))
                 .map_err(|e| err(&e))?
-                .label(format!("the shader's default ({label})"))
+                .label(format!("{}: all {} ({knob_names})", s.name, mine.len()))
+                .legend(move |(x, y)| Circle::new((x + 10, y), 4, light.filled()));
+            let mut front: Vec<(f64, f64, String)> = mine
+                .iter()
+                .filter(|r| r.pareto)
+                .map(|r| {
+                    let (x, y) = point(r);
+                    (x, y, r.values.iter().map(i32::to_string).collect::<Vec<_>>().join("/"))
+                })
+                .collect();
+            front.sort_by(|a, b| a.0.total_cmp(&b.0));
+            chart
+                .draw_series(LineSeries::new(front.iter().map(|p| (p.0, p.1)), colour.stroke_width(2)))
+                .map_err(|e| err(&e))?
+                .label(format!("{}: Pareto front", s.name))
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
+            fronts.push((colour, front));
+        }
+        // The rings before the front labels, so that a label next to one stays readable on top.
+        let defaults: Vec<(f64, f64)> = rows
+            .iter()
+            .filter(drawable)
+            .filter(|r| subjects.get(r.subject).is_some_and(|s| !s.knobs.is_empty() && r.values == s.defaults))
+            .map(point)
+            .collect();
+        if !defaults.is_empty() {
+            chart
+                .draw_series(defaults.iter().map(|&p| Circle::new(p, 9, BLACK.stroke_width(2))))
+                .map_err(|e| err(&e))?
+                .label("each shader's default configuration")
                 .legend(|(x, y)| Circle::new((x + 10, y), 6, BLACK.stroke_width(2)));
         }
         if !reduced.is_empty() {
-            let blue = RGBColor(30, 80, 200);
+            let grey = RGBColor(70, 70, 70);
             let diamond = move |(x, y): (i32, i32), r: i32| {
-                Polygon::new(vec![(x, y - r), (x + r, y), (x, y + r), (x - r, y)], blue.filled())
+                Polygon::new(vec![(x, y - r), (x + r, y), (x, y + r), (x - r, y)], grey.filled())
             };
             chart
                 .draw_series(reduced.iter().map(|(x, y, label)| {
                     EmptyElement::at((*x, *y))
                         + diamond((0, 0), 7)
-                        + Text::new(label.clone(), (8, 4), ("sans-serif", 14).into_font().color(&blue))
+                        + Text::new(label.clone(), (8, 4), ("sans-serif", 14).into_font().color(&grey))
                 }))
                 .map_err(|e| err(&e))?
-                .label("the default at half / quarter sky resolution (bilinear)")
+                .label(format!("{}'s default at half / quarter sky resolution (bilinear)", subjects[0].name))
                 .legend(move |(x, y)| diamond((x + 10, y), 6));
         }
         // Labels alternate above-right and below-left of their points, away from a falling
         // front, so that neighbours close in time do not print over each other.
-        chart
-            .draw_series(front.iter().enumerate().map(|(i, (x, y, label))| {
-                let at = if i % 2 == 0 { (6, -18) } else { (-8 - 7 * label.len() as i32, 6) };
-                EmptyElement::at((*x, *y))
-                    + Circle::new((0, 0), 5, red.filled())
-                    + Text::new(label.clone(), at, ("sans-serif", 14).into_font().color(&red))
-            }))
-            .map_err(|e| err(&e))?;
+        for (colour, front) in &fronts {
+            let colour = *colour;
+            chart
+                .draw_series(front.iter().enumerate().map(|(i, (x, y, label))| {
+                    let at = if i % 2 == 0 { (6, -18) } else { (-8 - 7 * label.len() as i32, 6) };
+                    EmptyElement::at((*x, *y))
+                        + Circle::new((0, 0), 5, colour.filled())
+                        + Text::new(label.clone(), at, ("sans-serif", 14).into_font().color(&colour))
+                }))
+                .map_err(|e| err(&e))?;
+        }
         chart
             .configure_series_labels()
             .background_style(WHITE.mix(0.85))
@@ -782,11 +1179,20 @@ fn checksum(pixels: &[[f32; 4]]) -> u64 {
     fnv1a(pixels.iter().flat_map(|p| p.iter().flat_map(|c| c.to_le_bytes())))
 }
 
-/// The text a cached truth is keyed by: everything that changes its pixels.
-fn truth_key(params: &FreemanParams, scene: &Scene, views: &[Projection], width: u32, height: u32) -> String {
+/// The text a cached truth is keyed by: everything that changes its pixels, which truth and its
+/// settings first.
+fn truth_key(
+    mode: &TruthMode,
+    params: &FreemanParams,
+    scene: &Scene,
+    views: &[Projection],
+    width: u32,
+    height: u32,
+) -> String {
     format!(
-        "gdsky truth v1: skyref f64 {}\nviews={views:?}\nsize={width}x{height}\nscene={scene:?}\nparams={params:?}\n",
-        skyref_version()
+        "gdsky truth v2: skyref {}\ntruth={}\nviews={views:?}\nsize={width}x{height}\nscene={scene:?}\nparams={params:?}\n",
+        skyref_version(),
+        mode.key()
     )
 }
 
@@ -797,7 +1203,9 @@ fn skyref_version() -> &'static str {
 }
 
 /// The truth pixel at column `x` of the strip and row `y`, computed now (for the spot check).
+#[allow(clippy::too_many_arguments)] // one pixel of a strip: the strip's every dimension
 fn truth_pixel(
+    mode: &TruthMode,
     params: &FreemanParams,
     scene: &Scene,
     views: &[Projection],
@@ -808,24 +1216,25 @@ fn truth_pixel(
 ) -> [f32; 4] {
     let view = views[((x / w) as usize).min(views.len() - 1)];
     let d = skyref::f64::eyedir(scene, view, x % w, y, w, h);
-    let c = skyref::f64::sky_color(params, scene, d);
+    let c = mode.color(params, scene, d);
     [c.x as f32, c.y as f32, c.z as f32, 0.0]
 }
 
 /// Largest cache key file read (a key is a few hundred bytes).
 const MAX_KEY_BYTES: u64 = 64 << 10;
 
-/// The converged truth of the scene, from the cache when a valid entry exists; else computed
-/// (rows in parallel) and stored. The string says which.
+/// The truth of the scene, from the cache when a valid entry exists; else computed (rows in
+/// parallel) and stored. The string says which.
 fn cached_truth(
     dir: &Path,
+    mode: &TruthMode,
     params: &FreemanParams,
     scene: &Scene,
     views: &[Projection],
     width: u32,
     height: u32,
 ) -> (Image, String) {
-    let key = truth_key(params, scene, views, width, height);
+    let key = truth_key(mode, params, scene, views, width, height);
     let stem = format!("truth-{:016x}", fnv1a(key.bytes()));
     let exr = dir.join(format!("{stem}.exr"));
     let key_path = dir.join(format!("{stem}.key"));
@@ -850,7 +1259,7 @@ fn cached_truth(
             return Err("the pixels do not match their checksum".into());
         }
         for &(x, y) in &spots {
-            let now = truth_pixel(params, scene, views, width, height, x, y);
+            let now = truth_pixel(mode, params, scene, views, width, height, x, y);
             let then = image.pixels[(y * strip_w + x) as usize];
             if now.map(f32::to_bits) != then.map(f32::to_bits) {
                 return Err(format!("pixel ({x}, {y}) recomputed differs: {now:?} vs {then:?}"));
@@ -862,10 +1271,8 @@ fn cached_truth(
         Ok(image) => (image, format!("truth: cached {}", exr.display())),
         Err(why) => {
             let started = std::time::Instant::now();
-            let rendered: Vec<Vec<[f32; 4]>> = views
-                .iter()
-                .map(|&view| sweep::narrow(&skyref::f64::render(params, scene, view, width, height)))
-                .collect();
+            let rendered: Vec<Vec<[f32; 4]>> =
+                views.iter().map(|&view| sweep::narrow(&mode.render(params, scene, view, width, height))).collect();
             // `strip` only fails for an empty image, which SceneArgs rules out.
             let image = strip(rendered, width, height).unwrap_or_else(|_| Image {
                 width: strip_w,
@@ -903,8 +1310,47 @@ mod tests {
     }
 
     #[test]
+    fn a_shader_sweeps_only_the_knobs_it_reads() {
+        let all = knobs(&[]).unwrap();
+        let read = |names: &[&str]| names.iter().map(|n| n.to_string()).collect::<BTreeSet<String>>();
+        let both = knobs_read(&all, &read(&["view_samples", "sun_samples", "sun_intensity"]), &[]);
+        assert_eq!(combinations(&both).len(), 32);
+        // Only view_samples: its finer default, unless a --knob set it.
+        let view = knobs_read(&all, &read(&["view_samples"]), &[]);
+        assert_eq!((view.len(), view[0].values.as_slice()), (1, VIEW_ONLY_SAMPLES.as_slice()));
+        let given = knobs(&["view_samples=4,8".into()]).unwrap();
+        let view = knobs_read(&given, &read(&["view_samples"]), &["view_samples".into()]);
+        assert_eq!(view[0].values, [4, 8]);
+        // No knob read: one configuration.
+        assert_eq!(combinations(&knobs_read(&all, &read(&[]), &[])), vec![Vec::<i32>::new()]);
+    }
+
+    #[test]
+    fn truth_flags_pick_the_truth() {
+        assert_eq!(TruthMode::from_args(None, None), Ok(TruthMode::Integral(Truth::default())));
+        let samples = Converged { view_samples: 128, sun_samples: 32 };
+        assert_eq!(TruthMode::from_args(None, Some((128, 32))), Ok(TruthMode::Samples(samples)));
+        assert_eq!(TruthMode::from_args(Some(TruthArg::Samples), None), Ok(TruthMode::Samples(Converged::default())));
+        assert!(TruthMode::from_args(Some(TruthArg::Integral), Some((128, 32))).is_err());
+        // The integral reads no sample count: every count shares one truth; the key names it.
+        let a = TruthMode::Integral(Truth::default());
+        let p = FreemanParams::default();
+        assert_eq!(a.params(&p), a.params(&p.with_samples(4, 2)));
+        assert!(a.key().starts_with("integral"));
+    }
+
+    #[test]
+    fn names_are_stems_unless_two_are_equal() {
+        let f = |p: &str| Some(PathBuf::from(p));
+        assert_eq!(subject_names(&[None, f("s/freeman_fast.gdshader")]), ["freeman_sky (bundled)", "freeman_fast"]);
+        assert_eq!(subject_names(&[f("a/x.gdshader"), f("b/x.gdshader")]), ["a/x.gdshader", "b/x.gdshader"]);
+        assert_eq!(csv_field("a,b"), "\"a,b\"");
+    }
+
+    #[test]
     fn pareto_front_excludes_dominated_points() {
         let row = |t: u64, e: f64| Row {
+            subject: 0,
             values: vec![],
             median: Duration::from_millis(t),
             min: Duration::ZERO,
