@@ -879,7 +879,7 @@ fn ratio(a: Duration, b: Duration) -> f64 {
 }
 
 /// The bench shader's reduced sky resolutions with the default (bilinear) upsampling, as
-/// (median ms, mean relative error vs the converged truth, `half` or `quarter`): the points
+/// (median ms, mean relative error vs the bench's truth, `half` or `quarter`): the points
 /// `--skipping` adds to the plot.
 fn reduced_points(rows: &[super::bench_skip::SkipRow]) -> Vec<(f64, f64, String)> {
     rows.iter()

@@ -5,10 +5,10 @@
 //!   row keeps its mix of sky and ground) and without any depth buffer, with the time ratios to
 //!   0 %, next to the visible fraction;
 //! * the sky at full, half and quarter resolution with both upsampling filters: time, speed-up
-//!   over full, and error against the full-resolution render and against the converged truth
+//!   over full, and error against the full-resolution render and against the bench's truth
 //!   (mean, p99 relative error and mean |Δ| after the preview's tone map);
 //! * the same resolutions for each `--skipping-shader` (at its own default uniforms; against
-//!   full resolution only: the converged truth is the Freeman sky's);
+//!   full resolution only: the truth is the Freeman model's);
 //! * the module kinds (`uniforms` rows): the uniforms the sweep varies (or those named with
 //!   `--override`) read from the material block (`generic`), baked into constants (`baked`),
 //!   and as pipeline-overridable constants (`overrides`), each at the base values, with the
@@ -53,7 +53,7 @@ pub struct SkipRow {
     pub median: Duration,
     /// Error against the full-resolution render (resolution rows).
     pub vs_full: Option<ErrorStats>,
-    /// Error against the converged truth (the bench's shader).
+    /// Error against the bench's truth (the first bench shader).
     pub vs_truth: Option<ErrorStats>,
 }
 
@@ -278,7 +278,7 @@ fn ratio(rows: &[SkipRow], r: &SkipRow) -> f64 {
 
 /// skipping.csv: shader, kind, variant, time_ms, ratio (occluder: time / time at 0 %;
 /// resolution: time at full / time), then mean_rel, p99_rel, mean_abs_tonemapped against full
-/// resolution and against the converged truth (empty where not measured).
+/// resolution and against the bench's truth (empty where not measured).
 pub fn csv(rows: &[SkipRow]) -> String {
     let mut out = String::from(
         "shader,kind,variant,time_ms,ratio,mean_rel_vs_full,p99_rel_vs_full,mean_abs_tonemapped_vs_full,mean_rel_vs_truth,p99_rel_vs_truth,mean_abs_tonemapped_vs_truth\n",
