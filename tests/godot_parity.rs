@@ -27,15 +27,30 @@
 //!   the test asserts Godot still rejects each of them and no other.
 //! * [`NOT_COMPARABLE`]: shaders whose output legitimately differs between the two renderers.
 //!
+//! ## Textures
+//!
+//! Every shader renders with its uniforms at their defaults and its sampler uniforms at their
+//! hints' stand-ins (white, or black for `hint_default_black`), except the textures
+//! [`textures_for`] gives: `freeman_lut.gdshader`'s `transmittance_table` is the table
+//! `skyref::lut::bake` bakes for the default parameters at 256×64 (Rgba32Float), bound in gdsky
+//! with `SkyShader::set_texture` and sent to Godot as an RGBAF `ImageTexture`, which its
+//! Compatibility renderer reads bit for bit with `texelFetch` (crates/skyoracle's tests).
+//!
 //! A negative control checks the bound has power: gdsky's render of one set-up against Godot's
-//! render of the other must fail it.
+//! render of the other must fail it. A second one checks that a given texture matters: gdsky's
+//! render without it (the stand-in) against Godot's with it must fail the bound too.
+//!
+//! `GDSKY_PARITY_ONLY=SUBSTRING` compares only the shaders whose file name contains it (the
+//! checks of the lists and the negative controls then cover only what ran).
 //!
 //! Needs the oracle (`bash scripts/install-oracle.sh`, which `.ci/run` runs) and a Vulkan
 //! adapter; without either the test fails with what is missing.
 
-use skyoracle::{Camera, Job, Oracle, OracleError, OracleImage, Sun};
-use skyref::{Projection, Scene};
-use skyrun::{Gpu, SkyBuiltins, SkyShader, SubPasses, material_with_defaults, texture_defaults};
+use skyoracle::{Camera, Job, Oracle, OracleError, OracleImage, Sun, UniformValue};
+use skyref::{FreemanParams, Projection, Scene};
+use skyrun::{
+    Gpu, SkyBuiltins, SkyShader, SubPasses, TexelFormat, TextureData, material_with_defaults, texture_defaults,
+};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -210,6 +225,46 @@ fn shaders(root: &Path) -> Vec<PathBuf> {
     files
 }
 
+/// A texture both renderers are given: width, height, RGBA f32 texels row 0 first (what
+/// `texelFetch(t, ivec2(x, y), 0)` reads at `texels[y * width + x]` in both).
+struct Texture {
+    uniform: &'static str,
+    width: u32,
+    height: u32,
+    texels: Vec<[f32; 4]>,
+}
+
+/// The textures a shader is compared with, by its file name; none for most.
+fn textures_for(name: &str) -> Vec<Texture> {
+    match name {
+        "freeman_lut.gdshader" => {
+            let (width, height) = skyref::lut::DEFAULT_SIZE;
+            let table = skyref::lut::bake(&FreemanParams::default(), width, height);
+            vec![Texture {
+                uniform: "transmittance_table",
+                width: table.width,
+                height: table.height,
+                texels: table.texels,
+            }]
+        }
+        _ => Vec::new(),
+    }
+}
+
+impl Texture {
+    fn for_gdsky(&self) -> TextureData {
+        let bytes = self.texels.iter().flatten().flat_map(|c| c.to_le_bytes()).collect();
+        TextureData::new(self.width, self.height, TexelFormat::Rgba32Float, bytes)
+            .unwrap_or_else(|e| panic!("{}: {e}", self.uniform))
+    }
+
+    fn for_godot(&self) -> (String, UniformValue) {
+        let value =
+            UniformValue::TextureRgbaF32 { width: self.width, height: self.height, texels: self.texels.clone() };
+        (self.uniform.to_string(), value)
+    }
+}
+
 #[test]
 fn gdsky_renders_what_godot_renders() {
     let start = Instant::now();
@@ -222,10 +277,14 @@ fn gdsky_renders_what_godot_renders() {
     let mut oracle = Oracle::start(root).unwrap_or_else(|e| panic!("this test needs the Godot oracle: {e}"));
     eprintln!("adapter {}; oracle ready in {:.2?}", gpu.adapter_info(), start.elapsed());
 
+    let only = std::env::var("GDSKY_PARITY_ONLY").ok();
+    let selected =
+        |path: &Path| only.as_deref().is_none_or(|o| path.file_name().is_some_and(|n| n.to_string_lossy().contains(o)));
     let mut problems = Vec::new();
     let mut rejected = Vec::new();
     let (mut compared, mut skipped_time, mut freeman_renders) = (0, Vec::new(), None);
-    for path in shaders(root) {
+    let mut texture_controls = 0;
+    for path in shaders(root).into_iter().filter(|p| selected(p)) {
         let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
         let front = gdsky::check_file(&path).expect("readable");
         let checked = front.shader.as_ref().unwrap_or_else(|| panic!("{name} does not check"));
@@ -236,9 +295,19 @@ fn gdsky_renders_what_godot_renders() {
         let lowered = gdsky_naga::lower(&front).expect("lowers");
         let wgsl = gdsky_naga::to_wgsl(&lowered).expect("WGSL");
         let material = material_with_defaults(checked, &lowered, &[]).expect("material");
-        let shader = SkyShader::new(&gpu, &wgsl, SubPasses::of(&front))
-            .unwrap_or_else(|e| panic!("{name}: the harness cannot bind it: {e}"))
-            .with_texture_defaults(texture_defaults(checked, &lowered));
+        let new_shader = || {
+            SkyShader::new(&gpu, &wgsl, SubPasses::of(&front))
+                .unwrap_or_else(|e| panic!("{name}: the harness cannot bind it: {e}"))
+                .with_texture_defaults(texture_defaults(checked, &lowered))
+                .with_material_textures(&gpu, gdsky_naga::reflect::texture_bindings(checked, &lowered))
+        };
+        let mut shader = new_shader();
+        let textures = textures_for(&name);
+        for t in &textures {
+            shader.set_texture(&gpu, t.uniform, &t.for_gdsky()).unwrap_or_else(|e| panic!("{name}: {e}"));
+        }
+        // The stand-ins only, for the texture control below.
+        let without_textures = if textures.is_empty() { None } else { Some(new_shader()) };
         let code = std::fs::read_to_string(&path).expect("readable");
         let comparable = !NOT_COMPARABLE.iter().any(|(n, _)| *n == name);
         for (k, set_up) in SET_UPS.iter().enumerate() {
@@ -248,7 +317,9 @@ fn gdsky_renders_what_godot_renders() {
                 .render(&gpu, Projection::Camera, WIDTH, HEIGHT, &builtins, &material)
                 .unwrap_or_else(|e| panic!("{name}: gdsky's render failed: {e}"))
                 .pixels;
-            let godot = match oracle.render(&set_up.job(&code)) {
+            let mut job = set_up.job(&code);
+            job.uniforms.extend(textures.iter().map(Texture::for_godot));
+            let godot = match oracle.render(&job) {
                 Ok(image) => image,
                 Err(OracleError::Shader(outcome)) => {
                     let first = outcome.errors.first().map(|e| e.message.clone()).unwrap_or_default();
@@ -285,6 +356,22 @@ fn gdsky_renders_what_godot_renders() {
                     ));
                 }
             }
+            if let Some(bare) = &without_textures {
+                // Power for the textures: without them gdsky must fail against Godot with them.
+                let bare = bare
+                    .render(&gpu, Projection::Camera, WIDTH, HEIGHT, &builtins, &material)
+                    .unwrap_or_else(|e| panic!("{name}: gdsky's render failed: {e}"))
+                    .pixels;
+                let control = judge(&bare, &godot);
+                eprintln!(
+                    "{name:<44} [{:<31}] texture control (gdsky without its textures): worst {:.2e}, {} failing",
+                    set_up.name, control.worst, control.failures
+                );
+                texture_controls += 1;
+                if control.failures == 0 {
+                    problems.push(format!("{name} [{}]: the render without its textures passes", set_up.name));
+                }
+            }
             if name == "freeman_sky.gdshader" && k == 0 {
                 freeman_renders = Some((ours, code.clone()));
             }
@@ -293,7 +380,8 @@ fn gdsky_renders_what_godot_renders() {
 
     // The lists above stay true: Godot rejects exactly the shaders listed, and every listed
     // shader exists.
-    let mut listed: Vec<&str> = GODOT_REJECTS.iter().map(|(n, _)| *n).collect();
+    let mut listed: Vec<&str> =
+        GODOT_REJECTS.iter().map(|(n, _)| *n).filter(|n| only.as_deref().is_none_or(|o| n.contains(o))).collect();
     listed.sort_unstable();
     rejected.sort();
     if rejected != listed {
@@ -305,16 +393,25 @@ fn gdsky_renders_what_godot_renders() {
         }
     }
 
+    if only.is_none() && texture_controls == 0 {
+        problems.push("no shader was compared with a texture (textures_for names none that ran)".into());
+    }
+
     // Power: gdsky's Freeman render of the first set-up against Godot's render of the second.
-    let (ours, code) = freeman_renders.expect("the Freeman sky was compared");
-    let other = oracle.render(&SET_UPS[1].job(&code)).expect("Godot renders the Freeman sky");
-    let control = judge(&ours, &other);
-    eprintln!(
-        "negative control (set-up 1 against set-up 2): worst {:.2e}, {} failing",
-        control.worst, control.failures
-    );
-    if control.failures == 0 {
-        problems.push("the negative control passes: the bound has no power".into());
+    match freeman_renders {
+        Some((ours, code)) => {
+            let other = oracle.render(&SET_UPS[1].job(&code)).expect("Godot renders the Freeman sky");
+            let control = judge(&ours, &other);
+            eprintln!(
+                "negative control (set-up 1 against set-up 2): worst {:.2e}, {} failing",
+                control.worst, control.failures
+            );
+            if control.failures == 0 {
+                problems.push("the negative control passes: the bound has no power".into());
+            }
+        }
+        None if only.is_some() => eprintln!("negative control skipped: GDSKY_PARITY_ONLY left out the Freeman sky"),
+        None => problems.push("the Freeman sky was not compared".into()),
     }
     eprintln!("{compared} renders compared; TIME skipped: {skipped_time:?}; total {:.2?}", start.elapsed());
     assert!(problems.is_empty(), "{} problem(s):\n{}", problems.len(), problems.join("\n"));
