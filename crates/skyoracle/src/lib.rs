@@ -97,7 +97,8 @@
 //!   frame while another build ran). A trivial shader: 16 ms per frame at 64×32.
 //! * Without `--disable-frame-rate-limit`, headless Chromium paces WebGL frames at about 1 Hz
 //!   with no GPU (1 s per frame whatever is drawn); the driver passes it.
-//! * The integration tests (`tests/oracle.rs`, 7 tests sharing one oracle) take about 15–25 s.
+//! * The integration tests (`tests/oracle.rs`, 10 tests sharing one oracle) took 36 s with other
+//!   builds running (15–25 s for the first 7 on a quieter machine).
 //!
 //! ## Conventions, as Godot 4.6's Compatibility renderer showed them
 //!
@@ -128,6 +129,30 @@
 //! * SwiftShader's GLSL `sin`/`cos` are off by up to about 5e−5; parity thresholds for shaders
 //!   that use them must allow for it.
 //! * A SubViewport side of 1 pixel becomes 2 ([`MIN_SIDE`]).
+//! * SCREEN_UV is FRAGCOORD.xy, in pixels (0.5 … W − 0.5), not the 0…1 the documentation
+//!   describes (and Forward+ and gdsky give): equal to FRAGCOORD.xy within 1e−6, computed in the
+//!   shader. A shader that reads SCREEN_UV differs between this oracle and gdsky.
+//!
+//! ## Textures
+//!
+//! [`UniformValue::TextureRgbaF32`] gives a `sampler2D` uniform a 2D texture of RGBA 32-bit
+//! floats: the job carries it as base64 of the little-endian bytes (for 256×64 texels, 349 528
+//! bytes, against 653 580 as JSON numbers, and exact), and `main.gd` builds
+//! `ImageTexture.create_from_image(Image.create_from_data(w, h, false, FORMAT_RGBAF, bytes))`.
+//! [`Job`]'s check refuses sides outside 1 … [`MAX_TEXTURE_SIDE`], a texel count other than
+//! w·h and non-finite texels. Texel (x, y) is `texels[y·w + x]`, which `texelFetch(t, ivec2(x,
+//! y), 0)` reads.
+//!
+//! Measured (`tests/oracle.rs`): the Compatibility renderer on WebGL2/SwiftShader keeps the
+//! texels **bit for bit** through `texelFetch`. Four texels holding values no 16-bit float or
+//! 8-bit format can hold (0.1, π, 1.2345e−5, 123.456, 1e5, 1e−30, 3.4e38, −2.5, …) were
+//! compared inside the shader with their bit patterns (a `uint` array and `floatBitsToUint`): all
+//! 16 channels equal, and the same comparison with one pattern one ulp off counts exactly one
+//! mismatch, its relative difference read back as that ulp. Through the recovery, the RGB of
+//! those texels came back within 0.27 %, and a 256×64 table of values over 1e−4 … 1e2 within
+//! 0.38 %, each texel at its own pixel: the recovery's accuracy, nothing added. A 256×64 texture
+//! adds about 0.1 s to a job (1.06 s at 256×64 × 27 frames, Godot 0.34 s of it, against 0.98 s
+//! with a 1×1 texture whose job also compiled the shader).
 //!
 //! ## Compile checks
 //!
@@ -143,7 +168,12 @@
 //! * One renderer: Compatibility (GLES3/WebGL2), single-threaded, 8-bit. Forward+ and Mobile
 //!   differ (LIGHT0_COLOR conversion, exact SKY_COORDS in 4.3–4.5, the radiance map); this oracle
 //!   does not see them. Only the background pass: no half/quarter-resolution or cubemap passes,
-//!   no radiance map, no fog, no textures (uniforms take numbers and number arrays only).
+//!   no radiance map, no fog.
+//! * Textures: 2D RGBA 32-bit float ones only, one level, no mipmaps; read exactly with
+//!   `texelFetch` (above). Filtered sampling (`texture()`) of them was not measured (WebGL2
+//!   filters 32-bit floats only with `OES_texture_float_linear`); 8-bit, sRGB (`source_color`),
+//!   3D, cube and array textures cannot be given, and a sampler uniform not given keeps Godot's
+//!   default for its hint.
 //! * The GPU is SwiftShader: its transcendental functions are approximations of their own.
 //! * Alpha is not recovered (the background pass forces it; [`OracleImage::pixels`] has alpha 1).
 //! * Negative values are not recoverable, and NaN looks like saturation (above).
