@@ -6,8 +6,8 @@
 //! [`MAX_SCENE_BYTES`]), parses it with serde (unknown keys refused, with a "did you mean") and
 //! validates every value with the same rules as the command-line flags ([`Range`],
 //! [`check_number`], [`check_size`]). Every error is a diagnostic located at file:line:col,
-//! rendered like the shader diagnostics (codespan). Paths in the file (`shader`, `occluder`) are
-//! relative to the scene file.
+//! rendered like the shader diagnostics (codespan). Paths in the file (`shader`, `occluder`, the
+//! `[textures]`) are relative to the scene file.
 //!
 //! ```toml
 //! shader = "../../fixtures/freeman_sky.gdshader" # absent: the bundled Freeman sky
@@ -32,6 +32,9 @@
 //! [uniforms]
 //! view_samples = 16
 //! ground_color = [0.1, 0.1, 0.1]
+//!
+//! [textures]                                       # sampler uniform = image (EXR or PNG)
+//! noise = "noise.png"
 //!
 //! [animate]                                        # gdsky animate only
 //! frames = 24
@@ -226,6 +229,17 @@ pub struct OverrideSetting {
     pub span: Span<usize>,
 }
 
+/// A texture the scene gives a sampler uniform (`[textures]`, as `--texture NAME=PATH`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TextureSetting {
+    /// The sampler uniform's name (`name_i` for element i of a sampler array).
+    pub name: String,
+    /// The image, resolved against the scene file's folder.
+    pub path: PathBuf,
+    /// Byte range of the path in the scene file.
+    pub span: Span<usize>,
+}
+
 /// Keyframes `[frame, value]`, ascending; between two, linear; before the first and after the
 /// last, held.
 #[derive(Clone, Debug, PartialEq)]
@@ -347,6 +361,8 @@ pub struct SceneFile {
     /// Uniforms emitted as pipeline-overridable constants (`overrides`), in file order, each
     /// once.
     pub overrides: Vec<OverrideSetting>,
+    /// Textures for sampler uniforms (`[textures]`), by name.
+    pub textures: Vec<TextureSetting>,
     /// The occluder mask, resolved against the scene file's folder.
     pub occluder: Option<PathBuf>,
     /// The sky's resolution.
@@ -394,6 +410,7 @@ struct RawScene {
     camera: Option<RawCamera>,
     uniforms: Option<BTreeMap<String, Spanned<UniformValueRaw>>>,
     overrides: Option<Vec<Spanned<String>>>,
+    textures: Option<BTreeMap<String, Spanned<String>>>,
     occluder: Option<Spanned<String>>,
     sky_resolution: Option<SkyResolution>,
     animate: Option<RawAnimate>,
@@ -764,6 +781,12 @@ impl SceneFile {
             pitch,
             uniforms,
             overrides,
+            textures: raw
+                .textures
+                .iter()
+                .flatten()
+                .map(|(name, p)| TextureSetting { name: name.clone(), path: resolve(p), span: p.span() })
+                .collect(),
             occluder: raw.occluder.as_ref().map(resolve),
             sky_resolution: raw.sky_resolution,
             animate,
@@ -825,6 +848,20 @@ impl SceneFile {
                 errors.push(Diagnostic::error(SCENE_VALUE, m.clone()).with_primary(self.file, o.span.clone(), m));
             }
         }
+        let textures = texture_names(shader);
+        for t in &self.textures {
+            if !textures.contains(&t.name) {
+                let name = &t.name;
+                let d = Diagnostic::error(SCENE_VALUE, format!("the shader has no sampler uniform `{name}`"))
+                    .with_primary(self.file, t.span.clone(), format!("`textures.{name}`"));
+                let d = match did_you_mean(name, textures.iter().map(String::as_str)) {
+                    Some(m) => d.with_note(format!("did you mean `{m}`?")),
+                    None if textures.is_empty() => d.with_note("it has no sampler uniforms"),
+                    None => d.with_note(format!("its sampler uniforms are: {}", textures.join(", "))),
+                };
+                errors.push(d);
+            }
+        }
         for t in self.animate.iter().flat_map(|a| &a.uniforms) {
             let integer = shader.uniforms.iter().any(|u| u.name == t.name && is_integer_type(&u.ty));
             for (frame, _) in &t.keys {
@@ -850,6 +887,14 @@ impl SceneFile {
         render_human(&self.db, &[d], false)
     }
 
+    /// A located error at the path of the texture `name` in `[textures]` (the whole file when
+    /// the scene does not give it), rendered.
+    pub fn texture_error(&self, name: &str, message: &str) -> String {
+        let span = self.textures.iter().find(|t| t.name == name).map(|t| t.span.clone()).unwrap_or(0..0);
+        let d = Diagnostic::error(SCENE_VALUE, message.to_string()).with_primary(self.file, span, message.to_string());
+        render_human(&self.db, &[d], false)
+    }
+
     /// The names of `overrides`, in file order.
     pub fn override_names(&self) -> Vec<String> {
         self.overrides.iter().map(|o| o.name.clone()).collect()
@@ -859,6 +904,25 @@ impl SceneFile {
     pub fn uniform_pairs(&self) -> Vec<(String, String)> {
         self.uniforms.iter().map(|u| (u.name.clone(), u.text.clone())).collect()
     }
+}
+
+/// The names a texture can be given under (`--texture NAME=PATH`, `[textures]`): each material
+/// sampler uniform's, and `name_i` for element i of a sampler array, in declaration order
+/// (the names of the reflection's `bindings.textures`).
+pub fn texture_names(shader: &gdshader::CheckedShader) -> Vec<String> {
+    use gdshader::check::types::Type;
+    shader
+        .uniforms
+        .iter()
+        .filter(|u| !u.global)
+        .flat_map(|u| match &u.ty {
+            Type::Sampler(..) => vec![u.name.clone()],
+            Type::Array(element, n) if matches!(**element, Type::Sampler(..)) => {
+                (0..*n).map(|i| format!("{}_{i}", u.name)).collect()
+            }
+            _ => Vec::new(),
+        })
+        .collect()
 }
 
 /// Whether uniform values of `ty` are integers (keyframes are rounded).
@@ -930,6 +994,18 @@ mod tests {
         assert_eq!((s.overrides[0].span.clone(), s.overrides[1].span.clone()), (13..16, 18..21));
         let err = parse("overrides = \"a\"\n").unwrap_err().to_string();
         assert!(err.contains("dir/s.toml:1:13"), "{err}");
+    }
+
+    #[test]
+    fn textures_resolve_against_the_scene_and_keep_their_place() {
+        let s = parse("[textures]\nnoise = \"tex/noise.png\"\n").unwrap();
+        assert_eq!(s.textures.len(), 1);
+        assert_eq!(
+            (s.textures[0].name.as_str(), s.textures[0].path.clone()),
+            ("noise", PathBuf::from("dir/tex/noise.png"))
+        );
+        assert_eq!(s.textures[0].span, 19..34);
+        assert!(parse("[textures]\nnoise = 3\n").is_err());
     }
 
     #[test]

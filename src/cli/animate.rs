@@ -217,7 +217,7 @@ fn animate(args: &AnimateArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
     check_override_conflicts(&override_names, Some(file), |n| {
         if keyframed.iter().any(|k| k == n) { None } else { bake_reason(n, Some(file), &cli_sets, args.bake_scene) }
     })?;
-    let loaded = load_shader_specialized(input.shader.as_deref(), Some(file), &override_names, |shader| {
+    let mut loaded = load_shader_specialized(input.shader.as_deref(), Some(file), &override_names, |shader| {
         if !args.bake_scene {
             return Default::default();
         }
@@ -226,6 +226,7 @@ fn animate(args: &AnimateArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
         baked
     })?;
     check_scene_uniforms(Some(file), &loaded)?;
+    loaded.textures = base.textures(Some(file), &loaded)?;
     let shader_info = loaded.front.shader.as_ref().ok_or(ExitCode::from(1))?;
     let used_set = shader_info.builtins_used.clone();
     let used = |prefix: &str| used_set.iter().any(|b| b.starts_with(prefix));

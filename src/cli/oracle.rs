@@ -46,6 +46,9 @@ fn oracle(args: &OracleArgs) -> Result<(), ExitCode> {
         eprintln!("error: {message}");
         ExitCode::from(1)
     };
+    if !args.scene.texture.is_empty() {
+        return Err(usage("--texture: the oracle does not give Godot textures yet".into()));
+    }
     if args.scene.projection.is_some_and(|p| p != ProjectionArg::Camera) {
         return Err(usage("the oracle renders Godot's camera view only: use --projection camera".into()));
     }

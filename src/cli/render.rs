@@ -67,7 +67,7 @@ fn render(args: &RenderArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
     check_override_conflicts(&names, input.scene.as_ref(), |n| {
         bake_reason(n, input.scene.as_ref(), &cli_sets, args.bake_scene)
     })?;
-    let loaded = load_shader_specialized(input.shader.as_deref(), input.scene.as_ref(), &names, |shader| {
+    let mut loaded = load_shader_specialized(input.shader.as_deref(), input.scene.as_ref(), &names, |shader| {
         if args.bake_scene {
             gdsky::scene::bake_values(shader, input.scene.as_ref(), &cli_sets)
         } else {
@@ -75,6 +75,7 @@ fn render(args: &RenderArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
         }
     })?;
     check_scene_uniforms(input.scene.as_ref(), &loaded)?;
+    loaded.textures = scene_args.textures(input.scene.as_ref(), &loaded)?;
     if args.bake_scene {
         let mut names: Vec<&String> = loaded.baked.keys().collect();
         names.sort();
@@ -154,6 +155,9 @@ pub fn run_reference(args: &ReferenceArgs) -> ExitCode {
 }
 
 fn reference(args: &ReferenceArgs) -> Result<(), ExitCode> {
+    if !args.scene.texture.is_empty() {
+        return Err(usage("--texture: the reference is the Freeman sky, which has no sampler uniforms"));
+    }
     let (views, width, height) = args.scene.views().map_err(usage)?;
     let params = freeman_params(&args.scene.overrides().map_err(usage)?).map_err(usage)?;
     check_outputs(&args.out, args.png.as_ref())?;

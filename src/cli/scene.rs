@@ -68,6 +68,13 @@ pub struct SceneArgs {
     /// Uniforms not set keep the shader's defaults.
     #[arg(long = "set", value_name = "NAME=VALUE")]
     pub set: Vec<String>,
+    /// Give a sampler uniform a texture: `--texture noise=noise.png`, `--texture table=lut.exr`
+    /// (element i of a sampler array: `NAME_i`). OpenEXR is read as 32-bit floats (bind it to a
+    /// texture the shader reads with texelFetch; sampling needs a filterable format), PNG as
+    /// 8-bit, sRGB-decoded when the uniform has `source_color`. Each side at most 8192.
+    /// Adds to a scene file's `[textures]` (a name given in both: this one). Repeatable.
+    #[arg(long = "texture", value_name = "NAME=PATH")]
+    pub texture: Vec<String>,
 }
 
 impl SceneArgs {
@@ -93,6 +100,71 @@ impl SceneArgs {
                 None => Err(format!("`--set {s}`: expected NAME=VALUE")),
             })
             .collect()
+    }
+
+    /// The textures to read, by sampler uniform: the scene file's `[textures]` (paths relative
+    /// to it), then each `--texture NAME=PATH` (a later one of a name replaces an earlier one).
+    /// Checked against `loaded`'s material textures and read, before any GPU work. Exit 1 when a
+    /// name is not a sampler uniform of the shader (located in the scene file when it comes from
+    /// there), a `--texture` is not NAME=PATH, or a file is not an image that fits; 2 when a file
+    /// cannot be read (missing, not a regular file, too large), as for every input file.
+    pub fn textures(
+        &self,
+        scene: Option<&SceneFile>,
+        loaded: &LoadedShader,
+    ) -> Result<Vec<(String, skyrun::TextureData)>, ExitCode> {
+        // (name, path, from the scene file)
+        let mut wanted: Vec<(String, PathBuf, bool)> =
+            scene.iter().flat_map(|s| &s.textures).map(|t| (t.name.clone(), t.path.clone(), true)).collect();
+        for t in &self.texture {
+            let Some((name, path)) = t.split_once('=').filter(|(n, p)| !n.trim().is_empty() && !p.is_empty()) else {
+                return Err(super::usage(format!("`--texture {t}`: expected NAME=PATH")));
+            };
+            wanted.retain(|(n, _, _)| n != name.trim());
+            wanted.push((name.trim().to_string(), PathBuf::from(path), false));
+        }
+        if wanted.is_empty() {
+            return Ok(Vec::new());
+        }
+        let Some(shader) = loaded.front.shader.as_ref() else {
+            return Err(ExitCode::from(1));
+        };
+        let bindings = gdsky_naga::reflect::texture_bindings(shader, &loaded.lowered);
+        // The module's resources, to refuse a texture its binding cannot take before any GPU
+        // work (the same check `SkyShader::set_texture` makes); a module the harness cannot
+        // bind fails later with its own message.
+        let declared = skyrun::bindings::discover(&loaded.wgsl).unwrap_or_default();
+        let names = gdsky::scene::texture_names(shader);
+        let mut textures = Vec::with_capacity(wanted.len());
+        for (name, path, from_scene) in wanted {
+            let fail = |message: String, code: u8| {
+                match scene.filter(|_| from_scene) {
+                    Some(scene) => eprint!("{}", scene.texture_error(&name, &message)),
+                    None => eprintln!("error: {message}"),
+                }
+                ExitCode::from(code)
+            };
+            let Some(binding) = bindings.iter().find(|b| b.name == name) else {
+                // A sampler uniform the lowering did not give a material binding (a global
+                // sampler uniform) is as unknown as a typo.
+                let origin = if from_scene { format!("`textures.{name}`") } else { format!("`--texture {name}=…`") };
+                let mut message = format!("{origin}: the shader has no sampler uniform `{name}`");
+                match gdsky::scene::did_you_mean(&name, names.iter().map(String::as_str)) {
+                    Some(m) => message.push_str(&format!("; did you mean `{m}`?")),
+                    None if names.is_empty() => message.push_str(" (it has no sampler uniforms)"),
+                    None => message.push_str(&format!("; its sampler uniforms are: {}", names.join(", "))),
+                }
+                return Err(fail(message, 1));
+            };
+            let data = skyrun::read_texture(&path, binding.srgb)
+                .map_err(|err| fail(format!("`{name}`: {err}"), if err.is_read() { 2 } else { 1 }))?;
+            if !declared.is_empty() {
+                skyrun::check_texture(&declared, &bindings, &name, data.format())
+                    .map_err(|err| fail(format!("{}: {err}", path.display()), 1))?;
+            }
+            textures.push((name, data));
+        }
+        Ok(textures)
     }
 
     /// Fills every scene flag not given on the command line from the scene file `file`; flags
@@ -370,6 +442,9 @@ pub struct LoadedShader {
     /// The uniforms emitted as pipeline-overridable constants (`--override`), the k-th with
     /// `@id(k)`.
     pub overrides: Vec<String>,
+    /// Textures for sampler uniforms ([`SceneArgs::textures`]), bound by
+    /// [`LoadedShader::compile`].
+    pub textures: Vec<(String, skyrun::TextureData)>,
 }
 
 impl LoadedShader {
@@ -409,17 +484,28 @@ impl LoadedShader {
         Ok(constants)
     }
 
-    /// The shader compiled on `gpu`, with Godot's sub-passes and default textures. Exit 1 when
-    /// the harness cannot bind it.
+    /// The shader compiled on `gpu`, with Godot's sub-passes, default textures, samplers from
+    /// the uniforms' hints and [`LoadedShader::textures`] bound. Exit 1 when the harness cannot
+    /// bind it or a texture does not fit its binding.
     pub fn compile(&self, gpu: &skyrun::Gpu) -> Result<skyrun::SkyShader, ExitCode> {
-        let defaults =
-            self.front.shader.as_ref().map(|s| skyrun::texture_defaults(s, &self.lowered)).unwrap_or_default();
-        skyrun::SkyShader::new(gpu, &self.wgsl, skyrun::SubPasses::of(&self.front))
-            .map(|shader| shader.with_texture_defaults(defaults))
-            .map_err(|err| {
-                eprintln!("error: {err}");
-                ExitCode::from(1)
-            })
+        let failed = |err: &dyn std::fmt::Display| {
+            eprintln!("error: {err}");
+            ExitCode::from(1)
+        };
+        let (defaults, bindings) = match self.front.shader.as_ref() {
+            Some(s) => {
+                (skyrun::texture_defaults(s, &self.lowered), gdsky_naga::reflect::texture_bindings(s, &self.lowered))
+            }
+            None => Default::default(),
+        };
+        let mut shader = skyrun::SkyShader::new(gpu, &self.wgsl, skyrun::SubPasses::of(&self.front))
+            .map_err(|err| failed(&err))?
+            .with_texture_defaults(defaults)
+            .with_material_textures(gpu, bindings);
+        for (name, data) in &self.textures {
+            shader.set_texture(gpu, name, data).map_err(|err| failed(&err))?;
+        }
+        Ok(shader)
     }
 }
 
@@ -491,6 +577,11 @@ pub fn check_override_conflicts(
         }
     }
     Ok(())
+}
+
+/// Whether `--texture` was given (for the commands that take [`SceneArgs`] but cannot use it).
+pub fn texture_given(matches: &ArgMatches) -> bool {
+    matches.try_get_many::<String>("texture").ok().flatten().is_some_and(|mut v| v.next().is_some())
 }
 
 /// Whether the flag `id` was given on the command line (not a default, not absent).
@@ -575,7 +666,7 @@ pub fn load_shader_specialized(
     let mut baked = bake(shader);
     baked.retain(|name, _| !overrides.contains(name));
     let (lowered, wgsl) = lower_and_emit(&front, &baked, overrides)?;
-    Ok(LoadedShader { front, lowered, wgsl, baked, overrides: overrides.to_vec() })
+    Ok(LoadedShader { front, lowered, wgsl, baked, overrides: overrides.to_vec(), textures: Vec::new() })
 }
 
 /// [`load_shader`], baking the uniforms `bake` picks from the checked shader (name → value in
@@ -587,7 +678,7 @@ pub fn load_shader_baking(
     let front = check_front(file)?;
     let baked = front.shader.as_ref().map(bake).unwrap_or_default();
     let (lowered, wgsl) = lower_and_emit(&front, &baked, &[])?;
-    Ok(LoadedShader { front, lowered, wgsl, baked, overrides: Vec::new() })
+    Ok(LoadedShader { front, lowered, wgsl, baked, overrides: Vec::new(), textures: Vec::new() })
 }
 
 /// Reads and checks `file` (the bundled Freeman sky without one), printing its diagnostics.

@@ -142,7 +142,9 @@ pub use metrics::{Metrics, PixelDiff, compare, worst_pixels};
 pub use render::{RenderError, Rendered, SkyShader, SubPasses, fragment_entry, render, sub_pass_size};
 pub use skip::{MAX_MASK_BYTES, MaskError, OCCLUDED, Occluder, RenderOptions, SkyResolution, UpsampleFilter};
 pub use skyref::Projection;
-pub use textures::{MAX_TEXTURE_FILE_BYTES, MAX_TEXTURE_SIDE, TexelFormat, TextureData, TextureError, read_texture};
+pub use textures::{
+    MAX_TEXTURE_FILE_BYTES, MAX_TEXTURE_SIDE, TexelFormat, TextureData, TextureError, check_texture, read_texture,
+};
 
 #[cfg(test)]
 mod tests;

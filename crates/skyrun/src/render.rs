@@ -320,40 +320,14 @@ impl SkyShader {
     /// module does not declare (a uniform the shader never reads is pruned) is accepted and
     /// unused.
     ///
-    /// Errors: a name that is not a material texture (the message lists the shader's);
-    /// [`TexelFormat::Rgba32Float`](crate::TexelFormat::Rgba32Float) for a texture the shader
-    /// samples with filtering (only a texture it reads solely with `texelFetch` is declared
-    /// non-filterable, see [`crate::bindings::discover`]); a texture that is not a float 2D one
-    /// (3D, cube, array and integer textures cannot be given yet); wgpu refusing the texture.
+    /// Errors: those of [`crate::check_texture`] (an unknown name, a 32-bit float texture for a
+    /// texture the shader samples with filtering, a binding that is not a float 2D texture),
+    /// and wgpu refusing the texture.
     pub fn set_texture(&mut self, gpu: &Gpu, name: &str, data: &crate::TextureData) -> Result<(), crate::TextureError> {
-        use crate::TextureError;
-        let Some(slot) = self.material_textures.iter().find(|t| t.name == name) else {
-            return Err(TextureError::UnknownName {
-                name: name.to_string(),
-                known: self.material_textures.iter().map(|t| t.name.clone()).collect(),
-            });
-        };
-        let key = (slot.group, slot.binding);
-        let Some(binding) = self.bindings.iter().find(|b| (b.group, b.binding) == key) else {
+        let Some(key) = crate::textures::check_texture(&self.bindings, &self.material_textures, name, data.format())?
+        else {
             return Ok(());
         };
-        let unsupported = |what: &str| TextureError::Unsupported { name: name.to_string(), what: what.to_string() };
-        let BindingKind::Texture { dimension, sample_type } = binding.kind else {
-            return Err(unsupported("its binding is not a texture"));
-        };
-        if dimension != wgpu::TextureViewDimension::D2 {
-            return Err(unsupported(&format!(
-                "a {dimension:?} texture; only 2D textures (sampler2D) can be given so far"
-            )));
-        }
-        let wgpu::TextureSampleType::Float { filterable } = sample_type else {
-            return Err(unsupported(
-                "an integer texture (isampler2D, usampler2D); only float textures can be given so far",
-            ));
-        };
-        if filterable && !data.format().filterable() {
-            return Err(TextureError::NotFilterable { name: name.to_string() });
-        }
         let size = wgpu::Extent3d { width: data.width(), height: data.height(), depth_or_array_layers: 1 };
         let view = scoped(gpu, || {
             let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
@@ -378,7 +352,7 @@ impl SkyShader {
             );
             texture.create_view(&wgpu::TextureViewDescriptor::default())
         })
-        .map_err(|e| TextureError::Wgpu(e.to_string()))?;
+        .map_err(|e| crate::TextureError::Wgpu(e.to_string()))?;
         self.provided.insert(key, view);
         Ok(())
     }

@@ -299,6 +299,52 @@ pub fn read_texture(path: &Path, srgb: bool) -> Result<TextureData, TextureError
     Err(decode("neither an OpenEXR nor a PNG file (its first bytes are neither signature)".into()))
 }
 
+/// Checks that a texture of `format` can be given to the material texture `name` of a module
+/// with `bindings` ([`crate::bindings::discover`]) and `textures` (the reflection's,
+/// [`gdsky_naga::reflect::texture_bindings`]), without a device: what
+/// [`crate::SkyShader::set_texture`] checks, for a host that wants to refuse a texture before it
+/// opens the GPU. Returns the texture's (group, binding), or `None` when the module does not
+/// declare it (the shader never reads the uniform, and the binding was pruned).
+///
+/// Errors: a name that is not a material texture (the message lists the shader's);
+/// [`TexelFormat::Rgba32Float`] for a texture the shader samples with filtering (a texture it
+/// reads only with `texelFetch` is declared non-filterable, see [`crate::bindings::discover`]);
+/// a binding that is not a float 2D texture (3D, cube, array and integer textures cannot be
+/// given yet).
+pub fn check_texture(
+    bindings: &[crate::bindings::Binding],
+    textures: &[gdsky_naga::reflect::TextureBinding],
+    name: &str,
+    format: TexelFormat,
+) -> Result<Option<(u32, u32)>, TextureError> {
+    let Some(slot) = textures.iter().find(|t| t.name == name) else {
+        return Err(TextureError::UnknownName {
+            name: name.to_string(),
+            known: textures.iter().map(|t| t.name.clone()).collect(),
+        });
+    };
+    let key = (slot.group, slot.binding);
+    let Some(binding) = bindings.iter().find(|b| (b.group, b.binding) == key) else {
+        return Ok(None);
+    };
+    let unsupported = |what: &str| TextureError::Unsupported { name: name.to_string(), what: what.to_string() };
+    let crate::bindings::BindingKind::Texture { dimension, sample_type } = binding.kind else {
+        return Err(unsupported("its binding is not a texture"));
+    };
+    if dimension != wgpu::TextureViewDimension::D2 {
+        return Err(unsupported(&format!("a {dimension:?} texture; only 2D textures (sampler2D) can be given so far")));
+    }
+    let wgpu::TextureSampleType::Float { filterable } = sample_type else {
+        return Err(unsupported(
+            "an integer texture (isampler2D, usampler2D); only float textures can be given so far",
+        ));
+    };
+    if filterable && !format.filterable() {
+        return Err(TextureError::NotFilterable { name: name.to_string() });
+    }
+    Ok(Some(key))
+}
+
 /// The sampler Godot's hints ask for (the reflection's `filter` and `repeat`): `nearest*`
 /// filters take the nearest texel, the others interpolate; `*_mipmap` picks the mipmap filter
 /// (material textures have one level, so it changes nothing); anisotropy is not applied;
