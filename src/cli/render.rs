@@ -86,6 +86,10 @@ fn render(args: &RenderArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
         );
     }
     let convert_time = started.elapsed();
+    // After the conversion is timed: the table is the scene's input, not part of converting.
+    if let Some(note) = loaded.bake_tables(&overrides).map_err(usage)? {
+        eprintln!("{note}");
+    }
     let material = loaded.material(&overrides).map_err(|e| usage(format!("--set: {e}")))?;
     let constants = loaded.constants(&overrides).map_err(usage)?;
     if !names.is_empty() {

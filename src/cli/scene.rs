@@ -429,6 +429,9 @@ pub fn set_freeman(params: &mut skyref::FreemanParams, overrides: &[(String, Str
     Ok(())
 }
 
+/// The sampler uniform of a baked transmittance table ([`LoadedShader::bake_tables`]).
+pub const TRANSMITTANCE_TABLE: &str = "transmittance_table";
+
 /// A checked, lowered shader ready to render.
 pub struct LoadedShader {
     /// The front end's output (the checked shader, its render modes and uniforms).
@@ -482,6 +485,43 @@ impl LoadedShader {
             constants.push((id.to_string(), constant_value(&value)));
         }
         Ok(constants)
+    }
+
+    /// Binds a baked transmittance table when the shader declares [`TRANSMITTANCE_TABLE`] (as
+    /// `shaders/freeman_lut.gdshader` does) and no texture was given for it: the table is baked
+    /// ([`skyref::lut::bake`], 256×64, ~0.1 s) from the material's own values — the shader's
+    /// defaults, then `values` (`--set`, the scene's uniforms), then the baked constants — so
+    /// it always matches the layers the shader is rendered with. Returns the note to print, or
+    /// `None` when nothing was baked. An error when a value that shapes the table is not a
+    /// number (the material check reports it first in practice).
+    pub fn bake_tables(&mut self, values: &[(String, String)]) -> Result<Option<String>, String> {
+        let Some(shader) = self.front.shader.as_ref() else { return Ok(None) };
+        let declared = gdsky::scene::texture_names(shader).iter().any(|n| n == TRANSMITTANCE_TABLE);
+        if !declared || self.textures.iter().any(|(n, _)| n == TRANSMITTANCE_TABLE) {
+            return Ok(None);
+        }
+        let mut params = skyref::FreemanParams::default();
+        let known: Vec<&'static str> = params.uniforms_mut().iter().map(|(n, _)| *n).collect();
+        let defaults = gdsky_naga::reflect::defaults_as_set(shader);
+        let mut settings: Vec<(&String, &String)> = defaults.iter().collect();
+        settings.sort();
+        settings.extend(values.iter().map(|(n, v)| (n, v)));
+        settings.extend(self.baked.iter());
+        for (name, value) in settings {
+            if known.contains(&name.as_str()) {
+                params.set(name, value)?;
+            }
+        }
+        let (width, height) = skyref::lut::DEFAULT_SIZE;
+        let started = std::time::Instant::now();
+        let table = skyref::lut::bake(&params, width, height);
+        let image = skyrun::Image { width: table.width, height: table.height, pixels: table.texels };
+        let data = skyrun::TextureData::from_image(&image).map_err(|e| e.to_string())?;
+        self.textures.push((TRANSMITTANCE_TABLE.to_string(), data));
+        Ok(Some(format!(
+            "{TRANSMITTANCE_TABLE}: baked {width}x{height} from the material in {:.2?} (give --texture {TRANSMITTANCE_TABLE}=TABLE.exr to use another)",
+            started.elapsed()
+        )))
     }
 
     /// The shader compiled on `gpu`, with Godot's sub-passes, default textures, samplers from
