@@ -227,6 +227,24 @@ fn animate(args: &AnimateArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
     })?;
     check_scene_uniforms(Some(file), &loaded)?;
     loaded.textures = base.textures(Some(file), &loaded)?;
+    // One table for the sequence, from the base values: a keyframed layer uniform would need a
+    // table per frame, which is not done (said on stderr when it happens).
+    if let Some(note) = loaded.bake_tables(&overrides).map_err(usage)? {
+        eprintln!("{note}");
+        let shaping = [
+            "rayleigh_scale_height",
+            "mie_scale_height",
+            "ozone_center",
+            "ozone_width",
+            "planet_radius",
+            "atmosphere_height",
+        ];
+        if keyframed.iter().any(|k| shaping.contains(&k.as_str())) {
+            eprintln!(
+                "warning: a keyframed uniform shapes the transmittance table; it is baked once, from the base values"
+            );
+        }
+    }
     let shader_info = loaded.front.shader.as_ref().ok_or(ExitCode::from(1))?;
     let used_set = shader_info.builtins_used.clone();
     let used = |prefix: &str| used_set.iter().any(|b| b.starts_with(prefix));
