@@ -247,6 +247,14 @@ fn textures_for(name: &str) -> Vec<Texture> {
                 texels: table.texels,
             }]
         }
+        "sunfall.gdshader" => {
+            // The shipped noise (RGBA8) as the same f32 values on both sides (byte / 255): the
+            // shader reads it with texelFetch, so the two renderers see identical texels.
+            let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders/sunfall_noise.png");
+            let data = skyrun::read_texture(&path, false).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            let texels = data.bytes().chunks_exact(4).map(|t| [0, 1, 2, 3].map(|c| f32::from(t[c]) / 255.0)).collect();
+            vec![Texture { uniform: "noise_texture", width: data.width(), height: data.height(), texels }]
+        }
         _ => Vec::new(),
     }
 }
@@ -310,6 +318,10 @@ fn gdsky_renders_what_godot_renders() {
         let without_textures = if textures.is_empty() { None } else { Some(new_shader()) };
         let code = std::fs::read_to_string(&path).expect("readable");
         let comparable = !NOT_COMPARABLE.iter().any(|(n, _)| *n == name);
+        // Channels the texture control fails, over the set-ups: a view may not show what the
+        // texture shapes (sunfall's terrain is below a camera pitched 35° up), but some view
+        // must, or the comparison does not depend on the texture.
+        let mut texture_failures = 0;
         for (k, set_up) in SET_UPS.iter().enumerate() {
             let scene = set_up.scene();
             let builtins = SkyBuiltins::from_scene(&scene, WIDTH, HEIGHT);
@@ -368,13 +380,14 @@ fn gdsky_renders_what_godot_renders() {
                     set_up.name, control.worst, control.failures
                 );
                 texture_controls += 1;
-                if control.failures == 0 {
-                    problems.push(format!("{name} [{}]: the render without its textures passes", set_up.name));
-                }
+                texture_failures += control.failures;
             }
             if name == "freeman_sky.gdshader" && k == 0 {
                 freeman_renders = Some((ours, code.clone()));
             }
+        }
+        if !textures.is_empty() && texture_failures == 0 {
+            problems.push(format!("{name}: the render without its textures passes in every set-up"));
         }
     }
 
