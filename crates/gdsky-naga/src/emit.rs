@@ -264,7 +264,8 @@ pub fn to_spirv(lowered: &Lowered) -> Result<Vec<u32>, EmitError> {
     let mut reread = naga::front::spv::parse_u8_slice(&bytes, &naga::front::spv::Options::default())
         .map_err(|e| fail(format!("the emitted SPIR-V does not re-read with naga's SPIR-V front end: {e}"), true))?;
     complete_spirv_reread(&mut reread);
-    validator()
+    // An f64 module (`lower_f64`) re-reads with f64 types and needs FLOAT64.
+    crate::validator_for(&reread)
         .validate(&reread)
         .map_err(|e| fail(format!("the re-read SPIR-V does not validate: {}", error_chain(e.as_inner())), true))?;
     // Every override reads back as the specialization constant of its id, with its default.
@@ -516,10 +517,16 @@ fn complete_spirv_reread(module: &mut naga::Module) {
         }
     }
     let sizes = [None, Some(naga::VectorSize::Bi), Some(naga::VectorSize::Tri), Some(naga::VectorSize::Quad)];
+    // An f64 module (`lower_f64`) may take modf of f64s too; its frexp is f32 or a routine.
+    let f64 = module.types.iter().any(|(_, t)| matches!(t.inner, naga::TypeInner::Scalar(naga::Scalar::F64)));
     for size in sizes {
         let scalar = naga::Scalar::F32;
         if modf {
             module.generate_predeclared_type(naga::PredeclaredType::ModfResult { size, scalar });
+            if f64 {
+                let scalar = naga::Scalar::F64;
+                module.generate_predeclared_type(naga::PredeclaredType::ModfResult { size, scalar });
+            }
         }
         if frexp {
             module.generate_predeclared_type(naga::PredeclaredType::FrexpResult { size, scalar });

@@ -21,10 +21,12 @@ mod emit;
 mod lower;
 mod opt;
 pub mod reflect;
+mod widen;
 pub mod wrapper;
 
 pub use emit::{EmitError, reread_wgsl, to_spirv, to_wgsl};
 pub use lower::{GLOBAL_UNIFORM_GROUP, MATERIAL_GROUP, TextureSlot, UniformSlot};
+pub use widen::{F64_MATH_WGSL, F64Output};
 pub use wrapper::Projection;
 
 use gdshader::parse::ast;
@@ -78,16 +80,44 @@ pub fn lower_with(front: &FrontendOutput, baked: &HashMap<String, String>) -> Re
     // The lowering recurses over the expression tree, which the front end lets grow to
     // `MAX_EXPR_DEPTH` (a chain of 2,048 operators): it gets the front end's deep stack rather
     // than whatever thread called it (a test thread has 2 MiB).
+    on_lowering_thread(|| lower_here(front, baked))?
+}
+
+/// Runs `f` on a thread with the lowering's deep stack.
+fn on_lowering_thread<T: Send>(f: impl FnOnce() -> T + Send) -> Result<T, Vec<Diagnostic>> {
     std::thread::scope(|scope| {
         std::thread::Builder::new()
             .stack_size(LOWERING_STACK_BYTES)
-            .spawn_scoped(scope, || lower_here(front, baked))
+            .spawn_scoped(scope, f)
             .map_err(|e| vec![Diagnostic::error(UNSUPPORTED, format!("cannot start the lowering's thread: {e}"))])?
             .join()
             .map_err(|_| {
                 vec![Diagnostic::error(INVALID_MODULE, "the lowering panicked: a bug in gdsky; please report it")]
-            })?
+            })
     })
+}
+
+/// Like [`lower_with`], and the module evaluates the shader in f64: every float of the shader's
+/// code and of the sky wrapper is an f64, the uniform blocks, textures and outputs stay f32 and
+/// are converted where they are read or written, and the transcendentals GLSL.std.450 has only
+/// in f32 are f64 routines grafted into the module. `output` says what the fragment entries
+/// return ([`F64Output`]). The material block's layout is the f32 module's (`uniforms`,
+/// `material_size` and `textures` are those of [`lower_with`]). See the `widen` essay for
+/// the rules and their limits. The module needs naga's `FLOAT64` capability ([`validator_f64`])
+/// and a device with `shaderFloat64` (wgpu's `Features::SHADER_F64`); write it as SPIR-V with
+/// [`to_spirv`] (WGSL has no f64).
+pub fn lower_f64(
+    front: &FrontendOutput,
+    baked: &HashMap<String, String>,
+    output: F64Output,
+) -> Result<Lowered, Vec<Diagnostic>> {
+    let (lowered, exact) = on_lowering_thread(|| (lower_here(front, baked), lower::take_exact_floats()))?;
+    let lowered = lowered?;
+    let module = widen::widen(&lowered.module, &lowered.info, &exact, output).map_err(|why| {
+        vec![Diagnostic::error(UNSUPPORTED, format!("the f64 evaluation cannot widen this shader: {why}"))]
+    })?;
+    let info = validator_f64().validate(&module).map_err(|err| vec![validation_diagnostic(front, &err)])?;
+    Ok(Lowered { module, info, ..lowered })
 }
 
 /// Stack of the lowering's thread: like the front end's, enough for its deepest expression in an
@@ -217,6 +247,22 @@ pub fn validator() -> Validator {
         ValidationFlags::all() - ValidationFlags::CONTROL_FLOW_UNIFORMITY,
         Capabilities::default() | Capabilities::SHADER_FLOAT16_IN_FLOAT32,
     )
+}
+
+/// [`validator`] with naga's `FLOAT64` capability, for the modules of [`lower_f64`].
+pub fn validator_f64() -> Validator {
+    Validator::new(
+        ValidationFlags::all() - ValidationFlags::CONTROL_FLOW_UNIFORMITY,
+        Capabilities::default() | Capabilities::SHADER_FLOAT16_IN_FLOAT32 | Capabilities::FLOAT64,
+    )
+}
+
+/// The validator for `module`: [`validator_f64`] when it has an f64 type, else [`validator`].
+pub(crate) fn validator_for(module: &naga::Module) -> Validator {
+    let f64 = module.types.iter().any(|(_, t)| {
+        matches!(t.inner, naga::TypeInner::Scalar(s) | naga::TypeInner::Vector { scalar: s, .. } if s == naga::Scalar::F64)
+    });
+    if f64 { validator_f64() } else { validator() }
 }
 
 /// A naga validation error as a diagnostic at the shader's own lines.

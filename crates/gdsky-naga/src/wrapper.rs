@@ -181,7 +181,7 @@ pub(crate) fn read_builtin(
 ) -> Option<Val> {
     let sp = span(at);
     if let Some(v) = gdshader::check::builtins::builtin_constant(name) {
-        return Some(Val::Value(b.expr(E::Literal(Literal::F32(v as f32)), sp)));
+        return Some(Val::Value(b.expr(E::Literal(crate::lower::f32_literal(v)), sp)));
     }
     if let Some(g) = lw.builtins.privates.get(name) {
         return Some(Val::Pointer(b.expr(E::GlobalVariable(*g), sp)));
@@ -385,7 +385,7 @@ fn fragment(lw: &mut Lowerer, global: Handle<GlobalVariable>, projection: Projec
             per_primitive: false,
         }),
     });
-    let f = |b: &mut FnBuilder, v: f64| b.expr(E::Literal(Literal::F32(v as f32)), sp);
+    let f = |b: &mut FnBuilder, v: f64| b.expr(E::Literal(crate::lower::f32_literal(v)), sp);
     let bin = |b: &mut FnBuilder, op, l, r| b.expr(E::Binary { op, left: l, right: r }, sp);
     let math = |b: &mut FnBuilder, fun, args: &[Handle<E>]| {
         b.expr(E::Math { fun, arg: args[0], arg1: args.get(1).copied(), arg2: args.get(2).copied(), arg3: None }, sp)

@@ -711,7 +711,35 @@ pub(crate) fn literal(s: GdScalar, v: &ConstValue) -> Option<Literal> {
         ConstValue::Bool(b) => Literal::Bool(b),
         ConstValue::Int(i) => Literal::I32(i as i32),
         ConstValue::UInt(u) => Literal::U32(u as u32),
-        ConstValue::Float(f) => Literal::F32(f as f32),
+        ConstValue::Float(f) => f32_literal(f),
         ConstValue::Composite(_) => return None,
     })
+}
+
+thread_local! {
+    /// The f64 values float constants were rounded from on this thread (see [`f32_literal`]).
+    static EXACT_FLOATS: std::cell::RefCell<crate::widen::ExactFloats> = std::cell::RefCell::default();
+}
+
+/// An f32 literal of `v`, remembering `v` by the f32's bits so that the f64 evaluation
+/// (`crate::widen`) can give the constant back at full precision. Each lowering runs on a thread
+/// of its own, so the record holds that lowering's constants only.
+pub(crate) fn f32_literal(v: f64) -> Literal {
+    let f = v as f32;
+    EXACT_FLOATS.with(|e| {
+        e.borrow_mut()
+            .entry(f.to_bits())
+            .and_modify(|seen| {
+                if *seen != Some(v) {
+                    *seen = None;
+                }
+            })
+            .or_insert(Some(v));
+    });
+    Literal::F32(f)
+}
+
+/// The record of [`f32_literal`] on this thread, emptied.
+pub(crate) fn take_exact_floats() -> crate::widen::ExactFloats {
+    EXACT_FLOATS.with(|e| std::mem::take(&mut *e.borrow_mut()))
 }
