@@ -54,7 +54,7 @@ impl Gpu {
     /// Opens the best Vulkan adapter: wgpu sorts discrete GPUs first, then integrated, other,
     /// virtual and last CPU adapters, so on a machine without a GPU this is lavapipe
     /// (`llvmpipe`, device type [`wgpu::DeviceType::Cpu`]). The device has no optional features
-    /// but timestamp queries (when offered) and wgpu's default limits.
+    /// but timestamp queries and f64 shaders (each when offered) and wgpu's default limits.
     pub fn new() -> Result<Gpu, NoAdapter> {
         let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
         desc.backends = wgpu::Backends::VULKAN;
@@ -67,8 +67,9 @@ impl Gpu {
         }))
         .map_err(|e| NoAdapter { reason: e.to_string() })?;
         // GPU timestamps time the passes themselves (`Rendered::gpu_time`) where the adapter
-        // has them (lavapipe does); nothing else is optional.
-        let required_features = adapter.features() & wgpu::Features::TIMESTAMP_QUERY;
+        // has them (lavapipe does); f64 arithmetic in shaders (`shaderFloat64`, lavapipe has
+        // it) lets the f64 evaluation run (`F64Sky`). Nothing else is optional.
+        let required_features = adapter.features() & (wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::SHADER_F64);
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("skyrun"),
             required_features,
@@ -85,6 +86,12 @@ impl Gpu {
     /// `TIMESTAMP_QUERY`), so [`crate::Rendered::gpu_time`] is set.
     pub fn has_timestamps(&self) -> bool {
         self.device.features().contains(wgpu::Features::TIMESTAMP_QUERY)
+    }
+
+    /// Whether shaders may compute in f64 (the device has `Features::SHADER_F64`), as
+    /// [`crate::F64Sky`] needs.
+    pub fn has_f64(&self) -> bool {
+        self.device.features().contains(wgpu::Features::SHADER_F64)
     }
 
     /// The adapter this device runs on.

@@ -125,6 +125,7 @@ mod render;
 pub mod safe_io;
 mod skip;
 mod textures;
+mod wide;
 
 pub use builtins::{RenderPass, SkyBuiltins, SkyLight, offsets};
 pub use gdsky_naga::reflect::TextureBinding;
@@ -142,6 +143,7 @@ pub use metrics::{Metrics, PixelDiff, compare, worst_pixels};
 pub use render::{RenderError, Rendered, SkyShader, SubPasses, fragment_entry, render, sub_pass_size};
 pub use skip::{MAX_MASK_BYTES, MaskError, OCCLUDED, Occluder, RenderOptions, SkyResolution, UpsampleFilter};
 pub use skyref::Projection;
+pub use wide::{F64Error, F64Sky, render_f64};
 pub use textures::{
     MAX_TEXTURE_FILE_BYTES, MAX_TEXTURE_SIDE, TexelFormat, TextureData, TextureError, check_texture, read_texture,
 };
