@@ -157,7 +157,8 @@ macro_rules! freeman_fast {
             /// erfc (relative error < 1.2e-7), folded into the exponential.
             fn chapman(h: $T, r: $T, mu: $T, scale: $T) -> $T {
                 let x = r / (scale * (1.0 - mu * mu).max(1e-6));
-                let z = (0.5 * x).sqrt() * mu;
+                let root = (0.5 * x).sqrt();
+                let z = root * mu;
                 let t = 1.0 / (1.0 + 0.5 * z);
                 #[allow(clippy::excessive_precision)]
                 let poly = -1.26551223
@@ -169,7 +170,8 @@ macro_rules! freeman_fast {
                                         + t * (-1.13520398
                                             + t * (1.48851587 + t * (-0.82215223 + t * 0.17087277))))))));
                 let correction = 1.0 + 0.375 / (x * (1.0 + z * z / 4.5));
-                scale * (0.5 * PI * x).sqrt() * correction * t * (poly - h / scale).exp()
+                // √(πX′/2) = √π·√(X′/2).
+                scale * (PI.sqrt() * root) * correction * t * (poly - h / scale).exp()
             }
 
             /// Optical depth of an exponential layer along a ray at any `mu`: for a ray below
@@ -402,9 +404,11 @@ macro_rules! freeman_fast {
                     // trapezoid times tanh(x/2)/(x/2) ≈ 1 − x²/12 (no cancellation); and the
                     // density's centroid in the step, as a fraction of it: 1/x − 1/(eˣ − 1), or
                     // 1/2 − x/12 for small x.
+                    // eˣ = ρ₀/ρ₁ (no exponential; a ρ₁ that underflows gives eˣ huge and the
+                    // centroid 1/x, its limit).
                     let layer_step = |r0: $T, r1: $T, x: $T| -> ($T, $T) {
                         if x.abs() > 0.1 {
-                            (step_here * (r0 - r1) / x, 1.0 / x - 1.0 / (x.exp() - 1.0))
+                            (step_here * (r0 - r1) / x, 1.0 / x - 1.0 / (r0 / r1.max(1e-30) - 1.0))
                         } else {
                             (step_here * 0.5 * (r0 + r1) * (1.0 - x * x / 12.0), 0.5 - x / 12.0)
                         }
