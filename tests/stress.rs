@@ -122,3 +122,14 @@ fn quick_stress_fast_against_its_own_reference() {
     assert!(o.status.success(), "{}", text(&o));
     assert!(text(&o).contains("reference: fast (skyref::fast, the default for this file name)"), "{}", text(&o));
 }
+
+/// freeman_lut against its own twin, each case with its own table (baked from the case's
+/// uniforms on both sides): no NaN/Inf, and the horizon within the f32 bound (measured
+/// 5.6e-5 worst, like freeman_fast: the table adds nothing in f32).
+#[test]
+fn quick_stress_lut_with_a_table_per_case() {
+    let lut = Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders/freeman_lut.gdshader");
+    let (s, o) = quick_with(Some(&lut), "lut", &[]);
+    assert!(text(&o).contains("reference: lut (skyref::fast (lut), the default for this file name)"), "{}", text(&o));
+    assert!(s.horizon_p999 <= 1e-3, "freeman_lut, horizon p99.9 {:e} > 1e-3", s.horizon_p999);
+}

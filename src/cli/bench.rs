@@ -559,6 +559,12 @@ fn bench(args: &BenchArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
             eprintln!("note: {name} declares but never reads {}: not swept", skipped.join(", "));
         }
         specialize(&mut loaded, args.bake_scene, &cli_sets, input.scene.as_ref(), &base, &all_knobs, &override_names)?;
+        // freeman_lut's table from the bench's base values (no knob shapes it).
+        let base_values: Vec<(String, String)> =
+            skyrun::freeman_values(&base).into_iter().map(|(n, v)| (n.to_string(), uniform_text(v))).collect();
+        if let Some(note) = loaded.bake_tables(&base_values).map_err(usage)? {
+            eprintln!("{name}: {note}");
+        }
         let mut configs = combinations(&knobs);
         let defaults: Vec<i32> = knobs.iter().filter_map(|k| int_value(&base, &k.name)).collect();
         // The comparisons need the first shader's default measured: added when the sweep

@@ -87,6 +87,9 @@ pub enum Reference {
     Original,
     /// skyref::fast::f32 / skyref::fast::f64: shaders/freeman_fast.gdshader's quadratures.
     Fast,
+    /// skyref::fast's `render_lut`: shaders/freeman_lut.gdshader, with the transmittance table
+    /// baked per case from the case's own uniforms and bound to the shader too.
+    Lut,
 }
 
 /// What a [`Reference`] is: its name in the report and its renderers.
@@ -97,6 +100,22 @@ struct Family {
     arithmetic: &'static str,
     render32: fn(&FreemanParams, &Scene, Projection, u32, u32) -> Vec<[f32; 4]>,
     render64: fn(&FreemanParams, &Scene, Projection, u32, u32) -> Vec<[f64; 4]>,
+    /// Whether the shader reads a transmittance table baked from each case's uniforms.
+    table: bool,
+}
+
+/// The table freeman_lut reads for `params` (skyref::lut, default size).
+fn table_for(params: &FreemanParams) -> skyref::lut::TransmittanceTable {
+    let (w, h) = skyref::lut::DEFAULT_SIZE;
+    skyref::lut::bake(params, w, h)
+}
+
+fn lut32(params: &FreemanParams, scene: &Scene, view: Projection, w: u32, h: u32) -> Vec<[f32; 4]> {
+    skyref::fast::f32::render_lut(params, &table_for(params), scene, view, w, h)
+}
+
+fn lut64(params: &FreemanParams, scene: &Scene, view: Projection, w: u32, h: u32) -> Vec<[f64; 4]> {
+    skyref::fast::f64::render_lut(params, &table_for(params), scene, view, w, h)
 }
 
 impl Reference {
@@ -109,21 +128,36 @@ impl Reference {
                 arithmetic: "the original Freeman arithmetic",
                 render32: skyref::f32::render,
                 render64: skyref::f64::render,
+                table: false,
             },
             Reference::Fast => Family {
                 label: "skyref::fast",
                 arithmetic: "freeman_fast's arithmetic",
                 render32: skyref::fast::f32::render,
                 render64: skyref::fast::f64::render,
+                table: false,
+            },
+            Reference::Lut => Family {
+                label: "skyref::fast (lut)",
+                arithmetic: "freeman_lut's arithmetic, with the case's own table",
+                render32: lut32,
+                render64: lut64,
+                table: true,
             },
         }
     }
 
     /// The default for a shader file: the family whose shader's stem FILE's starts with
-    /// (`freeman_fast…` → fast), else the original.
+    /// (`freeman_fast…` → fast, `freeman_lut…` → lut), else the original.
     fn for_file(file: Option<&Path>) -> Reference {
         let stem = file.and_then(Path::file_stem).and_then(|s| s.to_str()).unwrap_or_default();
-        if stem.starts_with("freeman_fast") { Reference::Fast } else { Reference::Original }
+        if stem.starts_with("freeman_fast") {
+            Reference::Fast
+        } else if stem.starts_with("freeman_lut") {
+            Reference::Lut
+        } else {
+            Reference::Original
+        }
     }
 
     /// Its `--reference` value.
@@ -303,13 +337,21 @@ fn stress(args: &StressArgs) -> Result<ExitCode, ExitCode> {
     super::check_output_dir(&args.out_dir, true, &["stress.md", "stress.csv", "grid.png"])?;
     let gpu = open_gpu()?;
     let adapter = gpu.adapter_info();
-    let shader = loaded.compile(&gpu)?;
+    let mut shader = loaded.compile(&gpu)?;
     let (pano, horizon) = if args.quick { ((32, 64), (64, 16)) } else { ((128, 256), (256, 64)) };
     let size = |view: View| if view == View::Panorama { pano } else { horizon };
 
-    let render = |case: &Case| -> Result<Rendered, ExitCode> {
+    let mut render = |case: &Case| -> Result<Rendered, ExitCode> {
         let params = case.params(&base).map_err(usage)?;
         let material = sweep::material(&loaded, &params).map_err(usage)?;
+        if family.table {
+            // The case's own table on the GPU too: a hint-range corner of a scale height changes
+            // it, and a stale table would be counted as the shader's error.
+            let table = table_for(&params);
+            let image = skyrun::Image { width: table.width, height: table.height, pixels: table.texels };
+            let data = skyrun::TextureData::from_image(&image).map_err(usage)?;
+            shader.set_texture(&gpu, super::scene::TRANSMITTANCE_TABLE, &data).map_err(usage)?;
+        }
         let (w, h) = size(case.view);
         let scene = case.scene();
         let builtins = SkyBuiltins::from_scene(&scene, w, h);

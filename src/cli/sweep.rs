@@ -19,14 +19,18 @@ pub fn freeman_names() -> Vec<&'static str> {
 }
 
 /// Loads FILE (the bundled Freeman sky without one) and checks that it is Freeman-compatible:
-/// exactly the Freeman sky's uniforms, with the same types. skyref models the Freeman sky's
+/// exactly the Freeman sky's uniforms, with the same types (and optionally freeman_lut's
+/// `transmittance_table`, which the commands bake from these uniforms). skyref models the Freeman sky's
 /// integral, so it is the truth only for such a shader. Exit 1 when it is not (or is invalid),
 /// 2 when it cannot be read.
 pub fn load_freeman(file: Option<&Path>) -> Result<LoadedShader, ExitCode> {
     let loaded = load_shader(file)?;
     let shader = loaded.front.shader.as_ref().ok_or(ExitCode::from(1))?;
     let name = file.map(|f| f.display().to_string()).unwrap_or_else(|| super::scene::BUNDLED_NAME.to_string());
-    let have: BTreeSet<&str> = shader.uniforms.iter().map(|u| u.name.as_str()).collect();
+    // freeman_lut's table is an input of the same model, baked from these uniforms
+    // (LoadedShader::bake_tables), not a uniform skyref lacks.
+    let have: BTreeSet<&str> =
+        shader.uniforms.iter().map(|u| u.name.as_str()).filter(|n| *n != super::scene::TRANSMITTANCE_TABLE).collect();
     let want: BTreeSet<&str> = freeman_names().into_iter().collect();
     if have != want {
         let missing: Vec<_> = want.difference(&have).copied().collect();
