@@ -26,6 +26,10 @@ macro_rules! freeman_fast {
 
         /// `const float MIN_LENGTH`: floor for scale heights and the ozone width (metres).
         const MIN_LENGTH: $T = 1e-3;
+        /// `const float MIN_OZONE_WIDTH`: floor for the ozone width (metres): a sun ray's kink
+        /// crossings are f32 square roots of terms near 4e13 m², good to tens of metres at a
+        /// slant, so a narrower tent cannot be cut into its linear pieces in f32.
+        const MIN_OZONE_WIDTH: $T = 100.0;
         /// `const float MIN_RATIO`: floor for mie_albedo and the phase denominators.
         const MIN_RATIO: $T = 1e-20;
         /// `const float SUN_DISK_EDGE`: 1 − 0.9998.
@@ -83,7 +87,7 @@ macro_rules! freeman_fast {
                     multiscattering_mie_g_backward: s(p.multiscattering_mie_g_backward),
                     multiscattering_mie_weight: s(p.multiscattering_mie_weight),
                     ozone_center: s(p.ozone_center),
-                    ozone_half_width: 0.5 * s(p.ozone_width).max(MIN_LENGTH),
+                    ozone_half_width: 0.5 * s(p.ozone_width).max(MIN_OZONE_WIDTH),
                     ozone_extinction: $V3::new(0.650, 1.881, 0.085) * 1e-6,
                     planet_radius: s(p.planet_radius),
                     atmosphere_height: s(p.atmosphere_height).max(0.0),
