@@ -19,6 +19,7 @@
 //! ```
 
 pub mod build;
+pub mod measure;
 pub mod scene;
 
 pub use gdshader as frontend;

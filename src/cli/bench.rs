@@ -45,11 +45,14 @@ use super::scene::{
 use super::sweep::{self, ErrorStats};
 use super::{environment, usage};
 use clap::{ArgMatches, Args, ValueEnum};
+use gdsky::measure::freeman::{TruthMode, cache_dir, cached_truth};
+use gdsky::measure::knobs::{Knob, combinations};
+use gdsky::measure::pareto;
 use plotters::prelude::*;
 use skyref::converged::Converged;
 use skyref::truth::Truth;
-use skyref::{FreemanParams, Projection, Scene, UniformMut};
-use skyrun::{Image, SkyBuiltins};
+use skyref::{FreemanParams, UniformMut};
+use skyrun::SkyBuiltins;
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -141,98 +144,22 @@ fn parse_counts(s: &str) -> Result<(i32, i32), String> {
     Ok((count(a)?, count(b)?))
 }
 
-/// The truth of a bench: which one, with its settings.
-#[derive(Clone, Copy, Debug, PartialEq)]
-enum TruthMode {
-    /// [`skyref::truth`] at these settings.
-    Integral(Truth),
-    /// [`skyref::converged`]: skyref f64 at these sample counts.
-    Samples(Converged),
-}
-
-impl TruthMode {
-    /// From `--truth` and `--truth-samples`; asking for the integral with sample counts is
-    /// wrong input (the counts would be ignored).
-    fn from_args(truth: Option<TruthArg>, samples: Option<(i32, i32)>) -> Result<TruthMode, String> {
-        let converged = |(view_samples, sun_samples)| Converged { view_samples, sun_samples };
-        match (truth, samples) {
-            (Some(TruthArg::Integral), Some(_)) => {
-                Err("--truth-samples sets the `samples` truth; it cannot go with --truth integral".into())
-            }
-            (None | Some(TruthArg::Integral), None) => Ok(TruthMode::Integral(Truth::default())),
-            (None | Some(TruthArg::Samples), Some(counts)) => Ok(TruthMode::Samples(converged(counts))),
-            (Some(TruthArg::Samples), None) => Ok(TruthMode::Samples(Converged::default())),
+/// The truth from `--truth` and `--truth-samples`; asking for the integral with sample counts
+/// is wrong input (the counts would be ignored).
+fn truth_from_args(truth: Option<TruthArg>, samples: Option<(i32, i32)>) -> Result<TruthMode, String> {
+    let converged = |(view_samples, sun_samples)| Converged { view_samples, sun_samples };
+    match (truth, samples) {
+        (Some(TruthArg::Integral), Some(_)) => {
+            Err("--truth-samples sets the `samples` truth; it cannot go with --truth integral".into())
         }
-    }
-
-    /// `params` as far as this truth depends on them: the samples truth replaces the sample
-    /// counts with its own; the integral reads no sample count, so they are zeroed and every
-    /// configuration that differs only in them shares one truth (and one cache entry).
-    fn params(&self, params: &FreemanParams) -> FreemanParams {
-        match self {
-            TruthMode::Integral(_) => params.with_samples(0, 0),
-            TruthMode::Samples(c) => c.params(params),
-        }
-    }
-
-    /// The truth's colour in direction `d` (`params` as [`TruthMode::params`] gives them).
-    fn color(&self, params: &FreemanParams, scene: &Scene, d: glam::DVec3) -> glam::DVec3 {
-        match self {
-            TruthMode::Integral(t) => skyref::truth::sky_color(params, scene, d, t),
-            TruthMode::Samples(_) => skyref::f64::sky_color(params, scene, d),
-        }
-    }
-
-    /// The truth's image of one view (rows in parallel).
-    fn render(&self, params: &FreemanParams, scene: &Scene, view: Projection, w: u32, h: u32) -> Vec<[f64; 4]> {
-        match self {
-            TruthMode::Integral(t) => skyref::truth::render(params, scene, view, w, h, t),
-            TruthMode::Samples(_) => skyref::f64::render(params, scene, view, w, h),
-        }
-    }
-
-    /// One line saying what the truth is (progress bar, output).
-    fn describe(&self) -> String {
-        match self {
-            TruthMode::Integral(t) => format!(
-                "skyref::truth, the model's integrals (Richardson on {}/{} view steps per piece, {} depth panels; ~1e-7)",
-                t.view_steps,
-                t.view_steps.saturating_mul(2),
-                t.depth_panels
-            ),
-            TruthMode::Samples(c) => format!(
-                "skyref f64 sums at {}/{} samples (--truth samples: the older truth, ~6e-4 mean off the integral)",
-                c.view_samples, c.sun_samples
-            ),
-        }
-    }
-
-    /// A short name for the chart's axis.
-    fn short(&self) -> String {
-        match self {
-            TruthMode::Integral(_) => "the integral (skyref::truth)".into(),
-            TruthMode::Samples(c) => format!("skyref f64 at {}/{} samples", c.view_samples, c.sun_samples),
-        }
-    }
-
-    /// The cache key's line for the truth: which one and every setting.
-    fn key(&self) -> String {
-        match self {
-            TruthMode::Integral(t) => format!("integral {t:?}"),
-            TruthMode::Samples(c) => format!("samples {c:?}"),
-        }
+        (None | Some(TruthArg::Integral), None) => Ok(TruthMode::Integral(Truth::default())),
+        (None | Some(TruthArg::Samples), Some(counts)) => Ok(TruthMode::Samples(converged(counts))),
+        (Some(TruthArg::Samples), None) => Ok(TruthMode::Samples(Converged::default())),
     }
 }
 
 /// One image per view (one for a panorama or camera, six cube faces).
 type ViewImages = Vec<Vec<[f32; 4]>>;
-
-/// One swept int uniform and its values.
-#[derive(Clone, Debug)]
-struct Knob {
-    name: String,
-    values: Vec<i32>,
-}
 
 /// One configuration's measurements.
 struct Row {
@@ -281,10 +208,8 @@ pub fn run(args: &BenchArgs, matches: &ArgMatches) -> ExitCode {
 
 /// The knobs: the defaults, each replaced or extended by a `--knob`.
 fn knobs(args: &[String]) -> Result<Vec<Knob>, String> {
-    let mut knobs = vec![
-        Knob { name: "view_samples".into(), values: VIEW_SAMPLES.to_vec() },
-        Knob { name: "sun_samples".into(), values: SUN_SAMPLES.to_vec() },
-    ];
+    let mut knobs =
+        vec![Knob::uniform("view_samples", VIEW_SAMPLES.to_vec()), Knob::uniform("sun_samples", SUN_SAMPLES.to_vec())];
     for arg in args {
         let (name, list) = arg.split_once('=').ok_or_else(|| format!("`--knob {arg}`: expected NAME=V1,V2,…"))?;
         let name = name.trim();
@@ -302,7 +227,7 @@ fn knobs(args: &[String]) -> Result<Vec<Knob>, String> {
             .collect::<Result<Vec<_>, _>>()?;
         match knobs.iter_mut().find(|k| k.name == name) {
             Some(k) => k.values = values,
-            None => knobs.push(Knob { name: name.into(), values }),
+            None => knobs.push(Knob::uniform(name, values)),
         }
     }
     Ok(knobs)
@@ -324,21 +249,6 @@ fn knobs_read(all: &[Knob], read: &BTreeSet<String>, given: &[String]) -> Vec<Kn
 /// The knob names `--knob` gave.
 fn given_knobs(args: &[String]) -> Vec<String> {
     args.iter().filter_map(|a| a.split_once('=')).map(|(n, _)| n.trim().to_string()).collect()
-}
-
-/// Every combination of the knobs' values, the first knob varying slowest.
-fn combinations(knobs: &[Knob]) -> Vec<Vec<i32>> {
-    knobs.iter().fold(vec![Vec::new()], |acc, knob| {
-        acc.iter()
-            .flat_map(|prefix| {
-                knob.values.iter().map(move |v| {
-                    let mut next = prefix.clone();
-                    next.push(*v);
-                    next
-                })
-            })
-            .collect()
-    })
 }
 
 /// The value of the int uniform `name` in `params`.
@@ -528,7 +438,7 @@ fn bench(args: &BenchArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
         super::render::warn_unapplied(file, "bench");
     }
     let scene_args = &scene_args;
-    let truth_mode = TruthMode::from_args(args.truth, args.truth_samples).map_err(usage)?;
+    let truth_mode = truth_from_args(args.truth, args.truth_samples).map_err(usage)?;
     let (views, width, height) = scene_args.views().map_err(usage)?;
     let mut base = FreemanParams::default();
     set_freeman(&mut base, &scene_args.overrides().map_err(usage)?).map_err(usage)?;
@@ -906,17 +816,19 @@ fn projection_name(scene: &SceneArgs) -> &'static str {
     }
 }
 
-/// Marks the configurations no other one beats in both median time and mean relative error.
+/// Marks the configurations no other one beats in both median time and mean relative error
+/// ([`pareto::front`]).
 fn mark_pareto(rows: &mut [Row]) {
-    let key: Vec<(Duration, f64, bool)> =
-        rows.iter().map(|r| (r.median, r.errors.mean, r.errors.nan + r.errors.inf == 0)).collect();
-    for (i, row) in rows.iter_mut().enumerate() {
-        let (t, e, finite) = key[i];
-        row.pareto = finite
-            && !key
-                .iter()
-                .enumerate()
-                .any(|(j, &(tj, ej, fj))| j != i && fj && tj <= t && ej <= e && (tj < t || ej < e));
+    let points: Vec<pareto::Point> = rows
+        .iter()
+        .map(|r| pareto::Point {
+            time: r.median.as_secs_f64(),
+            error: r.errors.mean,
+            usable: r.errors.nan + r.errors.inf == 0,
+        })
+        .collect();
+    for (row, on) in rows.iter_mut().zip(pareto::front(&points)) {
+        row.pareto = on;
     }
 }
 
@@ -1167,143 +1079,6 @@ fn tick(v: f64) -> String {
     format!("{v:.digits$}")
 }
 
-/// Where truth images are cached: `$GDSKY_CACHE_DIR`, else `$XDG_CACHE_HOME/gdsky`, else
-/// `$HOME/.cache/gdsky`, else `gdsky-cache` in the temp dir.
-pub fn cache_dir() -> PathBuf {
-    let env = |name: &str| std::env::var_os(name).filter(|v| !v.is_empty()).map(PathBuf::from);
-    env("GDSKY_CACHE_DIR")
-        .or_else(|| env("XDG_CACHE_HOME").map(|d| d.join("gdsky")))
-        .or_else(|| env("HOME").map(|d| d.join(".cache").join("gdsky")))
-        .unwrap_or_else(|| std::env::temp_dir().join("gdsky-cache"))
-}
-
-/// FNV-1a, 64 bits: a hash that is the same in every build (std's hashers promise no such
-/// thing), for cache file names and pixel checksums.
-fn fnv1a(bytes: impl IntoIterator<Item = u8>) -> u64 {
-    bytes.into_iter().fold(0xcbf2_9ce4_8422_2325, |h, b| (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3))
-}
-
-fn checksum(pixels: &[[f32; 4]]) -> u64 {
-    fnv1a(pixels.iter().flat_map(|p| p.iter().flat_map(|c| c.to_le_bytes())))
-}
-
-/// The text a cached truth is keyed by: everything that changes its pixels, which truth and its
-/// settings first.
-fn truth_key(
-    mode: &TruthMode,
-    params: &FreemanParams,
-    scene: &Scene,
-    views: &[Projection],
-    width: u32,
-    height: u32,
-) -> String {
-    format!(
-        "gdsky truth v2: skyref {}\ntruth={}\nviews={views:?}\nsize={width}x{height}\nscene={scene:?}\nparams={params:?}\n",
-        skyref_version(),
-        mode.key()
-    )
-}
-
-/// skyref's version, part of the key: a changed reference must not reuse old truths (the
-/// bit-for-bit spot check below catches a change without a version bump too).
-fn skyref_version() -> &'static str {
-    env!("CARGO_PKG_VERSION")
-}
-
-/// The truth pixel at column `x` of the strip and row `y`, computed now (for the spot check).
-#[allow(clippy::too_many_arguments)] // one pixel of a strip: the strip's every dimension
-fn truth_pixel(
-    mode: &TruthMode,
-    params: &FreemanParams,
-    scene: &Scene,
-    views: &[Projection],
-    w: u32,
-    h: u32,
-    x: u32,
-    y: u32,
-) -> [f32; 4] {
-    let view = views[((x / w) as usize).min(views.len() - 1)];
-    let d = skyref::f64::eyedir(scene, view, x % w, y, w, h);
-    let c = mode.color(params, scene, d);
-    [c.x as f32, c.y as f32, c.z as f32, 0.0]
-}
-
-/// Largest cache key file read (a key is a few hundred bytes).
-const MAX_KEY_BYTES: u64 = 64 << 10;
-
-/// The truth of the scene, from the cache when a valid entry exists; else computed (rows in
-/// parallel) and stored. The string says which.
-fn cached_truth(
-    dir: &Path,
-    mode: &TruthMode,
-    params: &FreemanParams,
-    scene: &Scene,
-    views: &[Projection],
-    width: u32,
-    height: u32,
-) -> (Image, String) {
-    let key = truth_key(mode, params, scene, views, width, height);
-    let stem = format!("truth-{:016x}", fnv1a(key.bytes()));
-    let exr = dir.join(format!("{stem}.exr"));
-    let key_path = dir.join(format!("{stem}.key"));
-    let strip_w = width * views.len() as u32;
-    let spots =
-        [(strip_w / 2, height / 2), (strip_w / 4, height / 2 - height.min(2) / 2), (0, 0), (strip_w - 1, height - 1)];
-    let cached = (|| -> Result<Image, String> {
-        if !key_path.exists() {
-            return Err("not cached yet".into());
-        }
-        let stored = skyrun::safe_io::read_limited(&key_path, MAX_KEY_BYTES).map_err(|e| e.to_string())?;
-        let stored = String::from_utf8(stored).map_err(|_| "the key is not UTF-8")?;
-        let (stored_key, sum) = stored.rsplit_once("checksum=").ok_or("no checksum")?;
-        if stored_key != key {
-            return Err("the key differs (hash collision or another version)".into());
-        }
-        let image = skyrun::read_exr(&exr).map_err(|e| e.to_string())?;
-        if (image.width, image.height) != (strip_w, height) {
-            return Err("wrong size".into());
-        }
-        if format!("{:016x}", checksum(&image.pixels)) != sum.trim() {
-            return Err("the pixels do not match their checksum".into());
-        }
-        for &(x, y) in &spots {
-            let now = truth_pixel(mode, params, scene, views, width, height, x, y);
-            let then = image.pixels[(y * strip_w + x) as usize];
-            if now.map(f32::to_bits) != then.map(f32::to_bits) {
-                return Err(format!("pixel ({x}, {y}) recomputed differs: {now:?} vs {then:?}"));
-            }
-        }
-        Ok(image)
-    })();
-    match cached {
-        Ok(image) => (image, format!("truth: cached {}", exr.display())),
-        Err(why) => {
-            let started = std::time::Instant::now();
-            let rendered: Vec<Vec<[f32; 4]>> =
-                views.iter().map(|&view| sweep::narrow(&mode.render(params, scene, view, width, height))).collect();
-            // `strip` only fails for an empty image, which SceneArgs rules out.
-            let image = strip(rendered, width, height).unwrap_or_else(|_| Image {
-                width: strip_w,
-                height,
-                pixels: vec![[0.0; 4]; (strip_w * height) as usize],
-            });
-            let elapsed = started.elapsed();
-            let stored = skyrun::safe_io::create_output_dir(dir)
-                .map_err(|e| format!("{}: {e}", dir.display()))
-                .and_then(|()| skyrun::write_exr(&exr, &image).map_err(|e| e.to_string()))
-                .and_then(|()| {
-                    let text = format!("{key}checksum={:016x}\n", checksum(&image.pixels));
-                    super::write_file(&key_path, text.as_bytes())
-                });
-            let note = match stored {
-                Ok(()) => format!("truth: computed in {elapsed:.1?} ({why}), cached as {}", exr.display()),
-                Err(e) => format!("truth: computed in {elapsed:.1?}; not cached ({e})"),
-            };
-            (image, note)
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1335,11 +1110,11 @@ mod tests {
 
     #[test]
     fn truth_flags_pick_the_truth() {
-        assert_eq!(TruthMode::from_args(None, None), Ok(TruthMode::Integral(Truth::default())));
+        assert_eq!(truth_from_args(None, None), Ok(TruthMode::Integral(Truth::default())));
         let samples = Converged { view_samples: 128, sun_samples: 32 };
-        assert_eq!(TruthMode::from_args(None, Some((128, 32))), Ok(TruthMode::Samples(samples)));
-        assert_eq!(TruthMode::from_args(Some(TruthArg::Samples), None), Ok(TruthMode::Samples(Converged::default())));
-        assert!(TruthMode::from_args(Some(TruthArg::Integral), Some((128, 32))).is_err());
+        assert_eq!(truth_from_args(None, Some((128, 32))), Ok(TruthMode::Samples(samples)));
+        assert_eq!(truth_from_args(Some(TruthArg::Samples), None), Ok(TruthMode::Samples(Converged::default())));
+        assert!(truth_from_args(Some(TruthArg::Integral), Some((128, 32))).is_err());
         // The integral reads no sample count: every count shares one truth; the key names it.
         let a = TruthMode::Integral(Truth::default());
         let p = FreemanParams::default();
