@@ -12,6 +12,9 @@
 //!   values) before validation; see its essay for what the lowering itself leaves out.
 //! * `wrapper.rs` adds Godot's sky wrapper: the built-ins uniform (group 0), per-pixel
 //!   built-ins, the fullscreen-triangle vertex entry and one fragment entry per projection.
+//! * `trace/` instruments a validated module to record, per pixel, the first expression that
+//!   made a NaN or an infinity, with a table of those expressions' places in the source
+//!   (`gdsky render --trace-nonfinite`).
 //!
 //! Every naga expression carries the span of the shader text it came from, so a validation
 //! error is reported at the user's file and line ([`lower`] maps it through the source map);
@@ -21,6 +24,7 @@ mod emit;
 mod lower;
 mod opt;
 pub mod reflect;
+pub mod trace;
 mod widen;
 pub mod wrapper;
 
