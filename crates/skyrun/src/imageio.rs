@@ -378,6 +378,24 @@ pub fn write_png_preview(path: &Path, image: &Image, exposure: f32, white: [f32;
     write_side_by_side_png(path, &[image], exposure, white)
 }
 
+/// Writes `image`'s [`write_png_preview`] with `overlay` over it: a pixel whose entry is
+/// `Some(colour)` is drawn in that colour, the others are the preview at a third of its
+/// brightness, so the marked pixels stand out against the sky they belong to
+/// (`gdsky render --trace-nonfinite` marks where each NaN or infinity first appeared).
+/// `overlay` has one entry per pixel, row 0 at the top. Replaced atomically.
+pub fn write_overlay_png(path: &Path, image: &Image, overlay: &[Option<[u8; 3]>]) -> Result<(), ImageError> {
+    image.check()?;
+    if overlay.len() != image.pixels.len() {
+        return Err(ImageError::BadSize { width: image.width, height: image.height, pixels: overlay.len() });
+    }
+    let mut rgb = Vec::with_capacity(image.pixels.len() * 3);
+    for (pixel, mark) in image.pixels.iter().zip(overlay) {
+        let c = mark.unwrap_or_else(|| tonemap(*pixel, DEFAULT_EXPOSURE, DEFAULT_WHITE).map(|v| v / 3));
+        rgb.extend_from_slice(&c);
+    }
+    write_atomically(path, &encode_png(path, image.width, image.height, &rgb)?)
+}
+
 /// Writes the [`write_png_preview`] previews of `images` next to each other, left to right,
 /// separated by 2-pixel grey (128) gaps, e.g. "gdsky vs reference" for the docs. All images
 /// must have the same height; at least one is needed. Replaced atomically.
@@ -694,6 +712,23 @@ mod tests {
         assert!(write_png_preview(&target, &image, 1.0, DEFAULT_WHITE).is_err());
         assert_eq!(entries(dir.path()), ["sky.exr"]);
         assert!(target.join("keep").exists());
+    }
+
+    #[test]
+    fn overlay_marks_pixels_over_a_dimmed_preview() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("overlay.png");
+        let image = Image::new(2, 1, vec![[4.0, 4.0, 4.0, 7.0], [4.0, 4.0, 4.0, 0.0]]).unwrap();
+        write_overlay_png(&path, &image, &[Some([1, 2, 3]), None]).unwrap();
+        let (width, height, png) = decode_png(&path);
+        assert_eq!((width, height), (2, 1));
+        let full = tonemap(image.pixels[1], DEFAULT_EXPOSURE, DEFAULT_WHITE);
+        assert_eq!(png, [[1, 2, 3], full.map(|v| v / 3)]);
+        assert!(full[0] > 30, "the preview is bright enough for the dimming to show: {full:?}");
+        // One entry per pixel, or nothing is written.
+        let other = dir.path().join("short.png");
+        assert!(matches!(write_overlay_png(&other, &image, &[None]), Err(ImageError::BadSize { .. })));
+        assert!(!other.exists());
     }
 
     #[test]
