@@ -2,12 +2,12 @@
 
 use super::scene::SkipArgs;
 use super::scene::{
-    SceneArgs, bake_reason, check_outputs, check_override_conflicts, check_scene_uniforms, load_shader_specialized,
-    open_gpu, open_input, override_names, set_freeman, strip, write_outputs,
+    LoadedShader, SceneArgs, bake_reason, check_outputs, check_override_conflicts, check_scene_uniforms,
+    load_shader_specialized, open_gpu, open_input, override_names, set_freeman, strip, write_outputs,
 };
 use super::usage;
 use clap::{ArgMatches, Args, ValueEnum};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
 
@@ -35,10 +35,21 @@ pub struct RenderArgs {
     /// Also write an 8-bit PNG preview, tone mapped 1 − exp(−L·0.5) and gamma 2.2.
     #[arg(long, value_name = "OUT.png")]
     png: Option<PathBuf>,
+    /// Also render an instrumented version of the shader that records, per pixel, the first
+    /// expression that made a NaN or an infinity; print each such place (`file:line:col`, the
+    /// expression, the pixel count) and write `OUT.nonfinite.png` marking the pixels (`OUT` is
+    /// `-o` without its `.exr`). With none: `no NaN or Inf`, no PNG. The EXR is the shader's
+    /// own render either way.
+    #[arg(long)]
+    trace_nonfinite: bool,
     #[command(flatten)]
     scene: SceneArgs,
     #[command(flatten)]
     skip: SkipArgs,
+    /// Godot's sky debanding: `godot` adds its noise to shaders that declare `render_mode
+    /// use_debanding` (docs/godot.md, "Debanding"); `none` leaves COLOR as the shader writes it.
+    #[arg(long, value_enum, default_value_t = super::debanding::DebandingArg::None)]
+    debanding: super::debanding::DebandingArg,
 }
 
 pub fn run(args: &RenderArgs, matches: &ArgMatches) -> ExitCode {
@@ -75,6 +86,7 @@ fn render(args: &RenderArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
         }
     })?;
     check_scene_uniforms(input.scene.as_ref(), &loaded)?;
+    super::debanding::apply(&mut loaded, args.debanding)?;
     loaded.textures = scene_args.textures(input.scene.as_ref(), &loaded)?;
     if args.bake_scene {
         let mut names: Vec<&String> = loaded.baked.keys().collect();
@@ -96,6 +108,8 @@ fn render(args: &RenderArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
         eprintln!("overrides: {}", names.join(", "));
     }
     let gpu = open_gpu()?;
+    let trace_constants = constants.clone();
+    let trace_views = views.clone();
     let shader = loaded.compile(&gpu)?.with_constants(constants);
     let builtins = scene_args.builtins(input.scene.as_ref(), width, height);
     let mut rendered = Vec::with_capacity(views.len());
@@ -113,7 +127,190 @@ fn render(args: &RenderArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
         ExitCode::from(1)
     })?;
     eprintln!("convert {convert_time:.2?}, GPU {gpu_time:.2?}, total {:.2?}", started.elapsed());
-    write_outputs(&image, &args.out, args.png.as_ref())
+    write_outputs(&image, &args.out, args.png.as_ref())?;
+    if args.trace_nonfinite {
+        let traced = TraceInputs { views: &trace_views, width, height, builtins: &builtins, material: &material };
+        trace_nonfinite(&loaded, &gpu, trace_constants, &traced, &image, &args.out)?;
+    }
+    Ok(())
+}
+
+/// What the instrumented render of `--trace-nonfinite` draws: the scene of the render.
+struct TraceInputs<'a> {
+    views: &'a [skyrun::Projection],
+    width: u32,
+    height: u32,
+    builtins: &'a skyrun::SkyBuiltins,
+    material: &'a [u8],
+}
+
+/// `--trace-nonfinite`: renders the instrumented module (see `gdsky_naga::trace`) with the
+/// render's scene, reads each pixel's first site from the alpha channel, prints the report and
+/// writes the PNG that marks the pixels. `image` is the normal render (the PNG's background).
+fn trace_nonfinite(
+    loaded: &LoadedShader,
+    gpu: &skyrun::Gpu,
+    constants: Vec<(String, f64)>,
+    inputs: &TraceInputs<'_>,
+    image: &skyrun::Image,
+    out: &Path,
+) -> Result<(), ExitCode> {
+    let failed = |err: &dyn std::fmt::Display| {
+        eprintln!("error: {err}");
+        ExitCode::from(1)
+    };
+    let traced = gdsky_naga::trace::instrument(&loaded.front, &loaded.lowered).map_err(|diagnostics| {
+        eprint!("{}", gdsky::frontend::diag::render_human(&loaded.front.db, &diagnostics, false));
+        ExitCode::from(1)
+    })?;
+    let wgsl = gdsky_naga::to_wgsl(&traced.lowered).map_err(|e| failed(&e.diagnostic(&loaded.front).message))?;
+    let shader = loaded.compile_wgsl(gpu, &wgsl)?.with_constants(constants);
+    // Every pixel shaded at full resolution, whatever `--occluder`/`--sky-resolution` say: an
+    // id cannot be upsampled, and a hidden pixel can still tell where a NaN comes from.
+    let options = skyrun::RenderOptions::default();
+    let mut views = Vec::with_capacity(inputs.views.len());
+    for view in inputs.views {
+        let r = shader
+            .render_with(gpu, *view, inputs.width, inputs.height, inputs.builtins, inputs.material, &options)
+            .map_err(|e| failed(&e))?;
+        views.push(r.pixels);
+    }
+    let ids = strip(views, inputs.width, inputs.height).map_err(|e| failed(&e))?;
+    let report = NonfiniteReport::new(&traced, &ids.pixels);
+    print!("{}", report.text());
+    if report.places.is_empty() {
+        return Ok(());
+    }
+    let png = nonfinite_png_path(out);
+    let overlay: Vec<Option<[u8; 3]>> = ids
+        .pixels
+        .iter()
+        .map(|p| report.place_of(&traced, p[3]).map(|i| PLACE_COLOURS[i.min(PLACE_COLOURS.len() - 1)].1))
+        .collect();
+    skyrun::write_overlay_png(&png, image, &overlay).map_err(|e| {
+        eprintln!("error: {e}");
+        ExitCode::from(2)
+    })?;
+    println!("wrote {}", png.display());
+    Ok(())
+}
+
+/// The colours of the places in the PNG, most pixels first (names for the report); places past
+/// the last share its colour.
+const PLACE_COLOURS: [(&str, [u8; 3]); 6] = [
+    ("magenta", [255, 0, 255]),
+    ("cyan", [0, 255, 255]),
+    ("yellow", [255, 255, 0]),
+    ("orange", [255, 128, 0]),
+    ("green", [0, 200, 0]),
+    ("white", [255, 255, 255]),
+];
+
+/// `OUT.nonfinite.png` for `-o OUT.exr` (the `.exr` replaced; any other name gets the suffix).
+pub fn nonfinite_png_path(out: &Path) -> PathBuf {
+    let name = out.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let stem = name.strip_suffix(".exr").or_else(|| name.strip_suffix(".EXR")).unwrap_or(&name);
+    out.with_file_name(format!("{stem}.nonfinite.png"))
+}
+
+/// The places where a NaN or an infinity first appeared, with their pixel counts, most first.
+/// Sites at the same place with the same text (the components of one source expression, or
+/// the steps the lowering writes for one call) are one place.
+struct NonfiniteReport {
+    /// (location, snippet, kinds, functions, pixels), most pixels first, then by location.
+    places: Vec<Place>,
+    /// The site ids of each place.
+    ids: Vec<Vec<u32>>,
+    pixels: usize,
+}
+
+struct Place {
+    location: String,
+    snippet: String,
+    kind: String,
+    function: String,
+    pixels: usize,
+}
+
+impl NonfiniteReport {
+    fn new(traced: &gdsky_naga::trace::Traced, pixels: &[[f32; 4]]) -> Self {
+        let mut per_site = vec![0usize; traced.sites.len()];
+        let mut unknown = 0usize;
+        for p in pixels {
+            match traced.site_of_alpha(p[3]) {
+                Some(site) => per_site[site.id as usize - 1] += 1,
+                None if p[3] != 0.0 => unknown += 1,
+                None => {}
+            }
+        }
+        if unknown > 0 {
+            // Only the instrumented module writes the alpha; anything else is a harness bug.
+            eprintln!("warning: {unknown} pixel(s) carry no site id (alpha neither 0 nor an id)");
+        }
+        let mut places: Vec<Place> = Vec::new();
+        let mut ids: Vec<Vec<u32>> = Vec::new();
+        for (site, &count) in traced.sites.iter().zip(&per_site) {
+            if count == 0 {
+                continue;
+            }
+            let location = site.location();
+            match places.iter().position(|p| p.location == location && p.snippet == site.snippet) {
+                Some(i) => {
+                    places[i].pixels += count;
+                    ids[i].push(site.id);
+                    if !places[i].kind.split(", ").any(|k| k == site.kind) {
+                        places[i].kind = format!("{}, {}", places[i].kind, site.kind);
+                    }
+                }
+                None => {
+                    places.push(Place {
+                        location,
+                        snippet: site.snippet.clone(),
+                        kind: site.kind.clone(),
+                        function: site.function.clone(),
+                        pixels: count,
+                    });
+                    ids.push(vec![site.id]);
+                }
+            }
+        }
+        let mut order: Vec<usize> = (0..places.len()).collect();
+        order.sort_by(|&a, &b| places[b].pixels.cmp(&places[a].pixels).then(a.cmp(&b)));
+        let mut sorted_places = Vec::with_capacity(places.len());
+        let mut sorted_ids = Vec::with_capacity(places.len());
+        let mut places: Vec<Option<Place>> = places.into_iter().map(Some).collect();
+        for i in order {
+            if let Some(p) = places[i].take() {
+                sorted_places.push(p);
+                sorted_ids.push(std::mem::take(&mut ids[i]));
+            }
+        }
+        NonfiniteReport { places: sorted_places, ids: sorted_ids, pixels: pixels.len() }
+    }
+
+    /// The index of the place whose site an alpha value names.
+    fn place_of(&self, traced: &gdsky_naga::trace::Traced, alpha: f32) -> Option<usize> {
+        let id = traced.site_of_alpha(alpha)?.id;
+        self.ids.iter().position(|ids| ids.contains(&id))
+    }
+
+    /// The printed report: `no NaN or Inf`, or a header and one line per place.
+    fn text(&self) -> String {
+        if self.places.is_empty() {
+            return "no NaN or Inf\n".to_string();
+        }
+        let total: usize = self.places.iter().map(|p| p.pixels).sum();
+        let mut s =
+            format!("NaN or Inf first made in {total} of {} pixels, at {} place(s):\n", self.pixels, self.places.len());
+        for (i, p) in self.places.iter().enumerate() {
+            let colour = PLACE_COLOURS[i.min(PLACE_COLOURS.len() - 1)].0;
+            s += &format!(
+                "  {}: `{}` ({} in {}): {} pixels ({colour})\n",
+                p.location, p.snippet, p.kind, p.function, p.pixels
+            );
+        }
+        s
+    }
 }
 
 /// Says which keys of a scene file a command does not apply (`bench` measures the

@@ -528,6 +528,12 @@ impl LoadedShader {
     /// the uniforms' hints and [`LoadedShader::textures`] bound. Exit 1 when the harness cannot
     /// bind it or a texture does not fit its binding.
     pub fn compile(&self, gpu: &skyrun::Gpu) -> Result<skyrun::SkyShader, ExitCode> {
+        self.compile_wgsl(gpu, &self.wgsl)
+    }
+
+    /// [`LoadedShader::compile`] with other WGSL of the same shader and bindings (the
+    /// instrumented module of `render --trace-nonfinite`).
+    pub fn compile_wgsl(&self, gpu: &skyrun::Gpu, wgsl: &str) -> Result<skyrun::SkyShader, ExitCode> {
         let failed = |err: &dyn std::fmt::Display| {
             eprintln!("error: {err}");
             ExitCode::from(1)
@@ -538,7 +544,7 @@ impl LoadedShader {
             }
             None => Default::default(),
         };
-        let mut shader = skyrun::SkyShader::new(gpu, &self.wgsl, skyrun::SubPasses::of(&self.front))
+        let mut shader = skyrun::SkyShader::new(gpu, wgsl, skyrun::SubPasses::of(&self.front))
             .map_err(|err| failed(&err))?
             .with_texture_defaults(defaults)
             .with_material_textures(gpu, bindings);
