@@ -31,7 +31,7 @@ pub mod wrapper;
 pub use emit::{EmitError, reread_wgsl, to_spirv, to_wgsl};
 pub use lower::{GLOBAL_UNIFORM_GROUP, MATERIAL_GROUP, TextureSlot, UniformSlot};
 pub use widen::{F64_MATH_WGSL, F64Output};
-pub use wrapper::Projection;
+pub use wrapper::{Debanding, Projection};
 
 use gdshader::parse::ast;
 use gdshader::{Diagnostic, FrontendOutput};
@@ -84,7 +84,7 @@ pub fn lower_with(front: &FrontendOutput, baked: &HashMap<String, String>) -> Re
     // The lowering recurses over the expression tree, which the front end lets grow to
     // `MAX_EXPR_DEPTH` (a chain of 2,048 operators): it gets the front end's deep stack rather
     // than whatever thread called it (a test thread has 2 MiB).
-    on_lowering_thread(|| lower_here(front, baked))?
+    on_lowering_thread(|| lower_here(front, baked, Debanding::None))?
 }
 
 /// Runs `f` on a thread with the lowering's deep stack.
@@ -115,7 +115,8 @@ pub fn lower_f64(
     baked: &HashMap<String, String>,
     output: F64Output,
 ) -> Result<Lowered, Vec<Diagnostic>> {
-    let (lowered, exact) = on_lowering_thread(|| (lower_here(front, baked), lower::take_exact_floats()))?;
+    let (lowered, exact) =
+        on_lowering_thread(|| (lower_here(front, baked, Debanding::None), lower::take_exact_floats()))?;
     let lowered = lowered?;
     let module = widen::widen(&lowered.module, &lowered.info, &exact, output).map_err(|why| {
         vec![Diagnostic::error(UNSUPPORTED, format!("the f64 evaluation cannot widen this shader: {why}"))]
@@ -128,7 +129,11 @@ pub fn lower_f64(
 /// unoptimised build, with a wide margin (only the pages touched are ever mapped).
 const LOWERING_STACK_BYTES: usize = 256 << 20;
 
-fn lower_here(front: &FrontendOutput, baked: &HashMap<String, String>) -> Result<Lowered, Vec<Diagnostic>> {
+fn lower_here(
+    front: &FrontendOutput,
+    baked: &HashMap<String, String>,
+    debanding: Debanding,
+) -> Result<Lowered, Vec<Diagnostic>> {
     let Some(shader) = front.shader.as_ref() else {
         return Err(front.diagnostics.clone());
     };
@@ -157,6 +162,7 @@ fn lower_here(front: &FrontendOutput, baked: &HashMap<String, String>) -> Result
         return Err(errors);
     }
     let mut lw = lower::Lowerer::new(shader, values);
+    lw.debanding = debanding;
     lw.items();
     if !lw.errors.is_empty() {
         return Err(lw
@@ -200,7 +206,19 @@ pub fn lower_with_overrides(
     baked: &HashMap<String, String>,
     overrides: &[String],
 ) -> Result<Lowered, Vec<Diagnostic>> {
-    let mut lowered = lower_with(front, baked)?;
+    lower_with_options(front, baked, overrides, Debanding::None)
+}
+
+/// Like [`lower_with_overrides`], with Godot's sky debanding emulated when `debanding` is
+/// [`Debanding::Godot`] and the shader declares `render_mode use_debanding` (see [`Debanding`]).
+/// A shader without `use_debanding` lowers to the same module either way.
+pub fn lower_with_options(
+    front: &FrontendOutput,
+    baked: &HashMap<String, String>,
+    overrides: &[String],
+    debanding: Debanding,
+) -> Result<Lowered, Vec<Diagnostic>> {
+    let mut lowered = on_lowering_thread(|| lower_here(front, baked, debanding))??;
     if overrides.is_empty() {
         return Ok(lowered);
     }

@@ -58,6 +58,25 @@ pub const PASS_QUARTER: u32 = 2;
 /// A cubemap (radiance) face.
 pub const PASS_CUBEMAP: u32 = 3;
 
+/// What the fragment entry points do for a shader with `render_mode use_debanding`.
+///
+/// Godot 4.x (Forward+/Mobile, `servers/rendering/renderer_rd/shaders/environment/sky.glsl`)
+/// compiles the sky pass with `#define USE_DEBANDING` and, as its last step, adds
+/// `interleaved_gradient_noise(gl_FragCoord.xy) * luminance_multiplier`, where the noise is
+/// `r = fract(52.9829189 · fract(dot(pos, (0.06711056, 0.00583715)))) · 2 − 1` and
+/// `vec3(r, −r, r) / 255`: ±1/255 per channel in COLOR's units, a pattern fixed per pixel.
+/// It is a compile-time switch in Godot (a define), so it is a lowering option here, not a
+/// field of the built-ins block (whose layout hosts fill without reflection). See
+/// docs/godot.md, "Debanding".
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Debanding {
+    /// No noise: the shader's linear COLOR, as before (the default).
+    #[default]
+    None,
+    /// Godot's interleaved-gradient-noise dither, added where Godot adds it.
+    Godot,
+}
+
 /// The per-pixel built-ins, which live in private globals.
 const PRIVATES: [(&str, &str); 9] = [
     ("HALF_RES_COLOR", "vec4"),
@@ -521,7 +540,29 @@ fn fragment(lw: &mut Lowerer, global: Handle<GlobalVariable>, projection: Projec
         rgb = b.expr(E::Select { condition: apply, accept: mixed, reject: rgb }, sp);
     }
     let lum = load_field(&mut b, global, &[LUMINANCE], sp);
-    let rgb = bin(&mut b, Bo::Multiply, rgb, lum);
+    let mut rgb = bin(&mut b, Bo::Multiply, rgb, lum);
+    if lw.debanding == Debanding::Godot && lw.shader.render_modes.iter().any(|m| m == "use_debanding") {
+        // Godot's last step: frag_color.rgb += interleaved_gradient_noise(gl_FragCoord.xy) *
+        // luminance_multiplier, with the noise's operations in its order.
+        let magic = [f(&mut b, 0.06711056), f(&mut b, 0.00583715)];
+        let magic = b.expr(E::Compose { ty: v2t, components: magic.to_vec() }, sp);
+        let d = math(&mut b, Mf::Dot, &[xy, magic]);
+        let inner = math(&mut b, Mf::Fract, &[d]);
+        let z = f(&mut b, 52.9829189);
+        let scaled = bin(&mut b, Bo::Multiply, z, inner);
+        let outer = math(&mut b, Mf::Fract, &[scaled]);
+        let two = f(&mut b, 2.0);
+        let doubled = bin(&mut b, Bo::Multiply, outer, two);
+        let one_f = f(&mut b, 1.0);
+        let r = bin(&mut b, Bo::Subtract, doubled, one_f);
+        let minus_r = b.expr(E::Unary { op: naga::UnaryOperator::Negate, expr: r }, sp);
+        let noise = b.expr(E::Compose { ty: v3t, components: vec![r, minus_r, r] }, sp);
+        let steps = f(&mut b, 255.0);
+        let steps = b.expr(E::Splat { size: VectorSize::Tri, value: steps }, sp);
+        let noise = bin(&mut b, Bo::Divide, noise, steps);
+        let noise = bin(&mut b, Bo::Multiply, noise, lum);
+        rgb = bin(&mut b, Bo::Add, rgb, noise);
+    }
     // Alpha is kept only where Godot keeps it: the sub-passes and the cubemap.
     let full = eq_u32(&mut b, pass, PASS_FULL, sp);
     let zero = f(&mut b, 0.0);

@@ -147,6 +147,8 @@ pub(crate) struct Lowerer<'a> {
     pub errors: Vec<LowerError>,
     /// Uniforms baked into constants (`--set`), with their values.
     baked: HashMap<String, ConstValue>,
+    /// Whether the wrapper adds Godot's debanding noise (for `use_debanding` shaders).
+    pub debanding: crate::Debanding,
 }
 
 pub(crate) fn span(s: ast::Span) -> Span {
@@ -171,6 +173,7 @@ impl<'a> Lowerer<'a> {
             sky_function: None,
             errors: Vec::new(),
             baked,
+            debanding: crate::Debanding::None,
         }
     }
 
