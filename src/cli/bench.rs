@@ -47,7 +47,7 @@ use super::{environment, usage};
 use clap::{ArgMatches, Args, ValueEnum};
 use gdsky::measure::freeman::{TruthMode, cache_dir, cached_truth};
 use gdsky::measure::knobs::{Knob, combinations};
-use gdsky::measure::pareto;
+use gdsky::measure::{any, pareto};
 use plotters::prelude::*;
 use skyref::converged::Converged;
 use skyref::truth::Truth;
@@ -113,10 +113,23 @@ pub struct BenchArgs {
     /// else ~/.cache/gdsky, else the temp dir's gdsky-cache].
     #[arg(long, value_name = "DIR")]
     cache_dir: Option<PathBuf>,
+    /// For a shader that is not Freeman-compatible: the sampling truth raises each quality
+    /// knob (doubling) until doubling it changes the f64 image by a mean relative error below
+    /// this [default: 1e-3].
+    #[arg(long, value_name = "REL", value_parser = parse_tolerance)]
+    converge_tol: Option<f64>,
     #[command(flatten)]
     scene: SceneArgs,
     #[command(flatten)]
     skipping: super::bench_skip::SkippingArgs,
+}
+
+/// `--converge-tol`: a relative change in (0, 1).
+pub fn parse_tolerance(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v > 0.0 && v < 1.0 => Ok(v),
+        _ => Err(format!("`{s}` is not a relative change between 0 and 1 (e.g. 1e-3)")),
+    }
 }
 
 /// `--truth`.
@@ -438,6 +451,30 @@ fn bench(args: &BenchArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
         super::render::warn_unapplied(file, "bench");
     }
     let scene_args = &scene_args;
+    // A shader skyref does not model is measured against itself: the sampling truth.
+    if let Some(file) = input.shader.as_deref()
+        && !is_freeman_compatible(file)?
+    {
+        if files.len() > 1 {
+            return Err(usage(format!(
+                "{}: several shaders on one chart need one truth: each must be Freeman-compatible (bench one \
+                 other shader at a time)",
+                file.display()
+            )));
+        }
+        if args.truth.is_some() || args.truth_samples.is_some() {
+            return Err(usage("--truth/--truth-samples choose skyref's truth, for Freeman-compatible shaders only"));
+        }
+        if args.skipping.skipping || args.bake_scene || !args.overrides.is_empty() {
+            return Err(usage(
+                "--skipping, --bake-scene and --override apply to Freeman-compatible shaders only (for now)",
+            ));
+        }
+        return bench_any(args, file, scene_args);
+    }
+    if args.converge_tol.is_some() {
+        return Err(usage("--converge-tol sets the sampling truth of shaders that are not Freeman-compatible"));
+    }
     let truth_mode = truth_from_args(args.truth, args.truth_samples).map_err(usage)?;
     let (views, width, height) = scene_args.views().map_err(usage)?;
     let mut base = FreemanParams::default();
@@ -705,7 +742,206 @@ fn bench(args: &BenchArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
         reduced = reduced_points(&rows);
     }
     let title = format!("{shader_names} on {}: {}x{} {}", adapter.name, width, height, projection_name(scene_args));
-    plot(&png_path, &title, &subjects, &rows, &reduced, timer, &truth_mode).map_err(environment)?;
+    plot(&png_path, &title, &subjects, &rows, &reduced, timer, &truth_mode.short()).map_err(environment)?;
+    println!("wrote    {} and {}", csv_path.display(), png_path.display());
+    Ok(())
+}
+
+/// Whether FILE is Freeman-compatible (skyref is its truth). A shader that does not read or
+/// check counts as compatible here, so the Freeman path reports its diagnostics as before.
+fn is_freeman_compatible(file: &Path) -> Result<bool, ExitCode> {
+    Ok(match gdsky::check_file(file) {
+        Ok(front) => front.shader.as_ref().is_none_or(gdsky::measure::freeman::compatible),
+        Err(_) => true,
+    })
+}
+
+/// Default of `--converge-tol`.
+pub const CONVERGE_TOL: f64 = 1e-3;
+/// Most doublings of one knob while converging (64×).
+pub const MAX_DOUBLINGS: u32 = 6;
+/// Largest value a knob is raised to while converging (and given with `--knob`).
+pub const MAX_ANY_KNOB: i32 = 4096;
+
+/// The knobs of a shader that is not Freeman-compatible: its quality knobs (loop bounds) with
+/// their default sweeps, each replaced or extended by a `--knob` (any int uniform or int const).
+pub fn any_knobs(sky: &any::Sky, given: &[String]) -> Result<Vec<Knob>, String> {
+    let mut knobs: Vec<Knob> = sky
+        .quality_knobs()
+        .iter()
+        .map(|d| Knob { name: d.name.clone(), values: any::default_sweep(d.default, d.range), kind: d.kind })
+        .collect();
+    for arg in given {
+        let (name, values) = gdsky::measure::knobs::parse_values(arg, 1, MAX_ANY_KNOB)?;
+        let kind = sky.kind_of(&name);
+        // A const must exist and be an int: specializing at its first value says so now.
+        sky.variant(&[(name.clone(), values[0])]).map_err(|e| format!("`--knob {arg}`: {e}"))?;
+        match knobs.iter_mut().find(|k| k.name == name) {
+            Some(k) => k.values = values,
+            None => knobs.push(Knob { name, values, kind }),
+        }
+    }
+    Ok(knobs)
+}
+
+/// Prints the convergence of the sampling truth as a table.
+pub fn convergence_table(c: &any::Converged) -> String {
+    let mut out = format!(
+        "  {:<20} {:>7} {:>7} {:>11} {:>11} {:>11} {:>12}\n",
+        "knob", "from", "to", "mean Δ", "p99 Δ", "max Δ", "f32 vs f64"
+    );
+    for s in &c.steps {
+        let (from, to) =
+            if s.knob == "all" { ("×1".into(), "×2".into()) } else { (s.from.to_string(), s.to.to_string()) };
+        out.push_str(&format!(
+            "  {:<20} {from:>7} {to:>7} {:>11.3e} {:>11.3e} {:>11.3e} {:>12.3e}{}\n",
+            s.knob,
+            s.change.mean,
+            s.change.p99,
+            s.change.max,
+            s.f32_vs_f64,
+            if s.rejected { "  rejected: the f64 image left the f32 one" } else { "" }
+        ));
+    }
+    out
+}
+
+/// `bench` for a shader that is not Freeman-compatible: the knobs swept, each configuration
+/// against the sampling truth (the same shader at converged knobs, in f64).
+fn bench_any(args: &BenchArgs, file: &Path, scene_args: &SceneArgs) -> Result<(), ExitCode> {
+    let (views, width, height) = scene_args.views().map_err(usage)?;
+    super::check_output_dir(&args.out_dir, true, &["bench.csv", "bench.png"])?;
+    let front = gdsky::check_file(file).map_err(|e| environment(format!("cannot read {}: {e}", file.display())))?;
+    let sky = any::Sky::new(front, scene_args.overrides().map_err(usage)?).map_err(usage)?;
+    let knobs = any_knobs(&sky, &args.knobs).map_err(usage)?;
+    let names: Vec<String> = knobs.iter().map(|k| k.name.clone()).collect();
+    let defaults: Vec<i32> = sky.defaults(&names).into_iter().map(|(_, v)| v).collect();
+    let mut configs = combinations(&knobs);
+    if !configs.contains(&defaults) {
+        configs.push(defaults.clone());
+    }
+    let scene = scene_args.scene();
+    let shots: Vec<any::Shot> =
+        views.iter().map(|&projection| any::Shot { scene, projection, width, height, time: scene_args.time }).collect();
+    let gpu = open_gpu()?;
+    let adapter = gpu.adapter_info();
+    let timer = if gpu.has_timestamps() { "gpu_timestamps" } else { "wall" };
+    let tolerance = args.converge_tol.unwrap_or(CONVERGE_TOL);
+    let bar = sweep::progress_bar(1 + configs.len() as u64 * (1 + u64::from(args.runs)));
+    bar.enable_steady_tick(Duration::from_millis(200));
+    let started = std::time::Instant::now();
+    let setting = |values: &[i32]| -> any::Setting { names.iter().cloned().zip(values.iter().copied()).collect() };
+    let limits = any::Limits { tolerance, max_value: MAX_ANY_KNOB, max_doublings: MAX_DOUBLINGS };
+    let truth =
+        any::converge(&gpu, &sky, &setting(&defaults), &names, &shots, limits, |m| bar.set_message(m.to_string()))
+            .map_err(|e| {
+                bar.suspend(|| eprintln!("error: {e}"));
+                ExitCode::from(1)
+            })?;
+    let truth_time = started.elapsed();
+    bar.inc(1);
+    let mut compiled = Vec::with_capacity(configs.len());
+    let mut errors = Vec::with_capacity(configs.len());
+    for values in &configs {
+        bar.set_message(format!("{}: compile, warm-up render and error", any::label(&setting(values))));
+        let c = sky.variant(&setting(values)).and_then(|v| v.compile(&gpu)).map_err(usage)?;
+        let images: Vec<Vec<[f32; 4]>> =
+            shots.iter().map(|s| c.render(&gpu, s).map(|r| r.0)).collect::<Result<_, _>>().map_err(usage)?;
+        errors.push(any::pooled(&images, &truth.images));
+        compiled.push(c);
+        bar.inc(1);
+    }
+    let mut times = vec![Vec::with_capacity(args.runs as usize); configs.len()];
+    for run in 0..args.runs {
+        bar.set_message(format!("timing: round {} of {} on {}", run + 1, args.runs, adapter.name));
+        for (c, t) in compiled.iter().zip(&mut times) {
+            let mut total = Duration::ZERO;
+            for s in &shots {
+                total += c.render(&gpu, s).map_err(usage)?.1;
+            }
+            t.push(total);
+            bar.inc(1);
+        }
+    }
+    bar.finish_and_clear();
+    let mut rows: Vec<Row> = configs
+        .iter()
+        .zip(errors)
+        .zip(&mut times)
+        .map(|((values, errors), times)| {
+            times.sort();
+            let n = times.len();
+            Row {
+                subject: 0,
+                values: values.clone(),
+                median: (times[(n - 1) / 2] + times[n / 2]) / 2,
+                min: times[0],
+                max: times[n - 1],
+                errors,
+                pareto: false,
+            }
+        })
+        .collect();
+    mark_pareto(&mut rows);
+    let name = subject_names(&[Some(file.to_path_buf())]).remove(0);
+    let loaded = super::scene::load_shader(Some(file))?;
+    let subjects =
+        vec![Subject { name: name.clone(), file: Some(file.to_path_buf()), loaded, knobs, configs, defaults }];
+
+    let csv_path = args.out_dir.join("bench.csv");
+    super::create_output_dir(&args.out_dir)?;
+    super::write_file(&csv_path, csv_text(&subjects, &rows, args.runs, timer).as_bytes()).map_err(environment)?;
+    let png_path = args.out_dir.join("bench.png");
+    let s = &subjects[0];
+    println!(
+        "gdsky bench: {}, {} configurations, {width}x{height} {}",
+        file.display(),
+        rows.len(),
+        projection_name(scene_args)
+    );
+    println!("adapter  {adapter}");
+    println!(
+        "timer    {}, median of {} after a warm-up, all configurations in the same interleaved rounds",
+        if timer == "wall" { "wall time submit → idle" } else { "GPU timestamp queries around the passes" },
+        args.runs
+    );
+    println!(
+        "truth    the sampling truth: {name} in f64 at converged knobs ({}), {:.1?}; error = |gdsky f32 − truth| / \
+         max(|truth|, {:e}) over RGB",
+        any::label(&truth.setting),
+        truth_time,
+        sweep::FLOOR
+    );
+    if names.is_empty() {
+        println!(
+            "knobs    none (no int uniform with a hint_range or int const bounds a loop): the truth is the f64 evaluation alone"
+        );
+    } else {
+        println!(
+            "convergence (each knob doubled until the f64 image moves by a mean < {tolerance:e}; `all`: every knob \
+             doubled at once as a check){}:",
+            if truth.converged { "" } else { " — NOT CONVERGED within the limit, the truth is the last step" }
+        );
+        print!("{}", convergence_table(&truth));
+    }
+    let swept = if s.knobs.is_empty() { "no knob".to_string() } else { names.join(" × ") };
+    println!("Pareto front of {name} ({swept}; no other configuration of it both faster and more accurate):");
+    let mine: Vec<&Row> = rows.iter().collect();
+    print!("{}", front_table(&s.knobs, &mine));
+    if let Some(d) = rows.iter().find(|r| r.values == s.defaults) {
+        println!(
+            "default  {}: {:.3} ms, mean {:.3e}, p99 {:.3e}, max {:.3e}, tone-mapped {:.3e}",
+            s.label(&d.values),
+            ms(d.median),
+            d.errors.mean,
+            d.errors.p99,
+            d.errors.max,
+            d.errors.mean_tonemapped
+        );
+    }
+    let title = format!("{name} on {}: {}x{} {}", adapter.name, width, height, projection_name(scene_args));
+    let truth_label = format!("f64 at {}", any::label(&truth.setting));
+    plot(&png_path, &title, &subjects, &rows, &[], timer, &truth_label).map_err(environment)?;
     println!("wrote    {} and {}", csv_path.display(), png_path.display());
     Ok(())
 }
@@ -937,7 +1173,7 @@ fn plot(
     rows: &[Row],
     reduced: &[(f64, f64, String)],
     timer: &str,
-    truth: &TruthMode,
+    truth: &str,
 ) -> Result<(), String> {
     sweep::register_fonts();
     let (w, h) = (960u32, 640u32);
@@ -978,7 +1214,7 @@ fn plot(
             } else {
                 "render time, ms (median, GPU timestamps around the passes)"
             })
-            .y_desc(format!("mean relative error vs {}", truth.short()))
+            .y_desc(format!("mean relative error vs {truth}"))
             .y_label_formatter(&|v| format!("{v:.0e}"))
             .x_label_formatter(&|v| tick(*v))
             .label_style(("sans-serif", 15))

@@ -56,6 +56,9 @@ pub fn day_scene(sun: f64) -> Scene {
     }
 }
 
+/// One f64 image per shot.
+pub type Images64 = Vec<Vec<[f64; 4]>>;
+
 /// Knob values: name → value.
 pub type Setting = Vec<(String, i32)>;
 
@@ -232,6 +235,27 @@ pub fn render64_all(
     shots.iter().map(|s| c.render(gpu, s)).collect()
 }
 
+/// The f64 images of `shots` at `setting` and the mean error of the f32 images against them.
+fn render_both(
+    gpu: &Gpu,
+    sky: &Sky,
+    setting: &[(String, i32)],
+    shots: &[Shot],
+) -> Result<(Images64, f64), String> {
+    let v = sky.variant(setting)?;
+    let (c64, c32) = (v.compile_f64(gpu)?, v.compile(gpu)?);
+    let images: Vec<Vec<[f64; 4]>> = shots.iter().map(|s| c64.render(gpu, s)).collect::<Result<_, _>>()?;
+    let f32s: Vec<Vec<[f32; 4]>> = shots.iter().map(|s| c32.render(gpu, s).map(|r| r.0)).collect::<Result<_, _>>()?;
+    let error = pooled(&f32s, &images).mean;
+    Ok((images, error))
+}
+
+/// How far the f32 render may move away from the f64 one, relative to where it started, before
+/// a convergence step's f64 image is taken to be wrong rather than better: past ~2,000 loop
+/// iterations per pixel lavapipe's f64 evaluation of `nishita.gdshader` jumps (mean 6e-3 → 0.19
+/// against f32, which stays put), so more samples must not make the truth worse unnoticed.
+pub const F64_GUARD: f64 = 10.0;
+
 /// [`stats::error_stats_f64`] over several images at once (their pixels pooled).
 pub fn pooled_f64(test: &[Vec<[f64; 4]>], truth: &[Vec<[f64; 4]>]) -> ErrorStats {
     let a: Vec<[f64; 4]> = test.iter().flatten().copied().collect();
@@ -257,6 +281,12 @@ pub struct Step {
     pub to: i32,
     /// The image before against the image after (pooled over the shots).
     pub change: ErrorStats,
+    /// Mean relative error of the f32 render against the f64 render at the new values: the
+    /// guard against an f64 evaluation that goes wrong (see [`converge`]).
+    pub f32_vs_f64: f64,
+    /// Whether the step was rejected because the f64 image left the f32 one (the truth stays
+    /// at the values before it).
+    pub rejected: bool,
 }
 
 /// The sampling truth: the shader at converged knobs, in f64.
@@ -280,12 +310,18 @@ pub struct Limits {
     pub tolerance: f64,
     /// Never raise a knob past this value (the knob is then reported as not converged).
     pub max_value: i32,
+    /// Never double a knob more than this many times: a knob that still changes the image
+    /// after 64× is not a sampling knob (a layer count, a pattern's frequency), and raising it
+    /// further only costs time.
+    pub max_doublings: u32,
 }
 
 /// Raises each of `names` (doubling, one knob at a time, from `start`) until doubling it
 /// changes the f64 images of `shots` by a mean relative error below `limits.tolerance`, or its
 /// value would pass `limits.max_value`. Then doubles all of them at once as a check (the `all` step): the
-/// truth is the image after that check, at twice the values each knob needed alone. The f64
+/// truth is the image after that check, at twice the values each knob needed alone. A step
+/// whose f64 image moves away from its own f32 render by more than [`F64_GUARD`]× the start's
+/// difference is rejected (recorded, not taken) and ends that knob's raising. The f64
 /// evaluation makes the truth also the precision truth: no f32 rounding in it.
 pub fn converge(
     gpu: &Gpu,
@@ -297,24 +333,30 @@ pub fn converge(
     mut progress: impl FnMut(&str),
 ) -> Result<Converged, String> {
     let mut setting = start.clone();
-    let mut images = render64_all(gpu, sky, &setting, shots)?;
+    let (mut images, baseline) = render_both(gpu, sky, &setting, shots)?;
+    let bound = F64_GUARD * baseline + 1e-4;
     let mut steps = Vec::new();
     let mut converged = true;
     for name in names {
         let Some(at) = setting.iter().position(|(n, _)| n == name) else { continue };
-        loop {
+        for doubling in 0.. {
             let from = setting[at].1;
             let to = from.max(1).saturating_mul(2);
-            if to > limits.max_value {
+            if to > limits.max_value || doubling >= limits.max_doublings {
                 converged = false;
                 break;
             }
             progress(&format!("converging: {name} {from} → {to}"));
             let mut next = setting.clone();
             next[at].1 = to;
-            let next_images = render64_all(gpu, sky, &next, shots)?;
+            let (next_images, f32_vs_f64) = render_both(gpu, sky, &next, shots)?;
             let change = pooled_f64(&images, &next_images);
-            steps.push(Step { knob: name.clone(), from, to, change });
+            let rejected = f32_vs_f64 > bound;
+            steps.push(Step { knob: name.clone(), from, to, change, f32_vs_f64, rejected });
+            if rejected {
+                converged = false;
+                break;
+            }
             (setting, images) = (next, next_images);
             if change.mean < limits.tolerance && change.nan + change.inf == 0 {
                 break;
@@ -330,11 +372,14 @@ pub fn converge(
             .collect();
         if next != setting {
             progress("converging: all knobs doubled (check)");
-            let next_images = render64_all(gpu, sky, &next, shots)?;
+            let (next_images, f32_vs_f64) = render_both(gpu, sky, &next, shots)?;
             let change = pooled_f64(&images, &next_images);
-            converged &= change.mean < limits.tolerance;
-            steps.push(Step { knob: "all".into(), from: 0, to: 0, change });
-            (setting, images) = (next, next_images);
+            let rejected = f32_vs_f64 > bound;
+            converged &= change.mean < limits.tolerance && !rejected;
+            steps.push(Step { knob: "all".into(), from: 0, to: 0, change, f32_vs_f64, rejected });
+            if !rejected {
+                (setting, images) = (next, next_images);
+            }
         }
     }
     Ok(Converged { setting, steps, images, converged })

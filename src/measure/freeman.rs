@@ -235,3 +235,15 @@ pub fn strip(views: Vec<Vec<[f32; 4]>>, width: u32, height: u32) -> Result<Image
     }
     Image::new(width * n as u32, height, pixels)
 }
+
+/// Whether `shader` is Freeman-compatible: exactly the Freeman sky's uniform names (and
+/// optionally freeman_lut's `transmittance_table`, baked from them), so skyref is its truth.
+/// The types are checked when the material is filled; this is the quiet test the commands use
+/// to choose between skyref's truth and the sampling truth of any shader.
+pub fn compatible(shader: &gdshader::CheckedShader) -> bool {
+    let mut params = FreemanParams::default();
+    let want: std::collections::BTreeSet<&str> = params.uniforms_mut().iter().map(|(n, _)| *n).collect();
+    let have: std::collections::BTreeSet<&str> =
+        shader.uniforms.iter().map(|u| u.name.as_str()).filter(|n| *n != "transmittance_table").collect();
+    have == want
+}
