@@ -1,7 +1,8 @@
-//! `gdsky compare A.exr B.exr [--max-rel X] [--floor F] [--heatmap OUT.png]`
+//! `gdsky compare A.exr B.exr [--max-rel X] [--floor F] [--heatmap OUT.png]
+//! [--mode pixel|stats] [--min-ssim S] [--max-region-rel R]`
 
 use super::scene::{F32_LIMIT, Range, parse_number};
-use clap::Args;
+use clap::{Args, ValueEnum};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -28,6 +29,36 @@ pub struct CompareArgs {
     /// `render --png`).
     #[arg(long, value_name = "OUT.png")]
     side_by_side: Option<PathBuf>,
+    /// `pixel`: per-channel relative errors (one line). `stats`: also a second line
+    /// `ssim=… region_mean_max_rel=… region_var_max_rel=…`, for skies whose pixels may differ
+    /// while their distribution must not (hash noise): SSIM of the `render --png` previews and,
+    /// over an 8 × 4 grid of regions, the luminance's mean and variance compared relatively
+    /// (docs/cli.md).
+    #[arg(long, value_enum, default_value_t = Mode::Pixel)]
+    mode: Mode,
+    /// With `--mode stats`: fail (exit 1) when the SSIM is below S (a number in [−1, 1]).
+    #[arg(long, value_name = "S", value_parser = parse_ssim, allow_hyphen_values = true)]
+    min_ssim: Option<f64>,
+    /// With `--mode stats`: fail (exit 1) when a region's mean or variance error is above R
+    /// (a finite number ≥ 0).
+    #[arg(long, value_name = "R", value_parser = parse_max_rel, allow_hyphen_values = true)]
+    max_region_rel: Option<f64>,
+}
+
+/// What `compare` measures.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Mode {
+    /// Per-channel relative errors only.
+    Pixel,
+    /// Relative errors, then SSIM and per-region luminance statistics.
+    Stats,
+}
+
+/// `--min-ssim S`: SSIM lies in [−1, 1].
+const SSIM: Range = Range::closed(-1.0, 1.0, "a number from -1 to 1");
+
+fn parse_ssim(s: &str) -> Result<f64, String> {
+    parse_number(s, "", &SSIM)
 }
 
 /// `--max-rel X`: a bound on a relative error, 0 or more.
@@ -48,6 +79,10 @@ fn parse_floor(s: &str) -> Result<f32, String> {
 }
 
 pub fn run(args: &CompareArgs) -> ExitCode {
+    if args.mode == Mode::Pixel && (args.min_ssim.is_some() || args.max_region_rel.is_some()) {
+        eprintln!("error: --min-ssim and --max-region-rel need --mode stats");
+        return ExitCode::from(1);
+    }
     // The outputs first: a typo in --heatmap costs nothing.
     for path in [&args.heatmap, &args.side_by_side].into_iter().flatten() {
         if let Err(code) = super::check_output(path) {
@@ -100,14 +135,36 @@ pub fn run(args: &CompareArgs) -> ExitCode {
         }
         eprintln!("wrote {}", path.display());
     }
-    match args.max_rel {
+    let mut failed = match args.max_rel {
         Some(bound) if m.max_rel > bound || m.nan + m.inf > 0 => {
             eprintln!(
                 "FAIL: max_rel {:.3e} > {bound:e} or non-finite channels ({} NaN, {} Inf)",
                 m.max_rel, m.nan, m.inf
             );
-            ExitCode::from(1)
+            true
         }
-        _ => ExitCode::SUCCESS,
+        _ => false,
+    };
+    if args.mode == Mode::Stats {
+        let s = skyrun::compare_stats(&a.pixels, &b.pixels, a.width as usize, a.height as usize, args.floor);
+        println!("{s}");
+        let (c, r) = skyrun::STATS_GRID;
+        eprintln!(
+            "regions {c}x{r}: worst mean at {:?}, worst variance at {:?}; {} non-finite pixel(s) left out",
+            s.worst_mean_region, s.worst_var_region, s.non_finite
+        );
+        if let Some(min) = args.min_ssim.filter(|min| s.ssim.is_nan() || s.ssim < *min) {
+            eprintln!("FAIL: ssim {:.6} < {min}", s.ssim);
+            failed = true;
+        }
+        let region = s.region_mean_max_rel.max(s.region_var_max_rel);
+        if let Some(max) = args.max_region_rel.filter(|max| region.is_nan() || region > *max) {
+            eprintln!(
+                "FAIL: region error {region:.3e} > {max:e} (mean {:.3e}, variance {:.3e})",
+                s.region_mean_max_rel, s.region_var_max_rel
+            );
+            failed = true;
+        }
     }
+    if failed { ExitCode::from(1) } else { ExitCode::SUCCESS }
 }

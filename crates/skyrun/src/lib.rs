@@ -139,7 +139,7 @@ pub use material::{
     MaterialError, UniformValue, freeman_material, freeman_values, material_bytes, material_with_defaults,
     texture_defaults,
 };
-pub use metrics::{Metrics, PixelDiff, compare, worst_pixels};
+pub use metrics::{Metrics, PixelDiff, STATS_GRID, Stats, compare, compare_stats, luminance, region_stats, worst_pixels};
 pub use render::{RenderError, Rendered, SkyShader, SubPasses, fragment_entry, render, sub_pass_size};
 pub use skip::{MAX_MASK_BYTES, MaskError, OCCLUDED, Occluder, RenderOptions, SkyResolution, UpsampleFilter};
 pub use skyref::Projection;
