@@ -113,6 +113,18 @@ enum Command {
     /// a shader declares `transmittance_table` and no --texture gives it. Exit status: 0 written,
     /// 1 a flag or value is invalid, 2 the output cannot be written.
     BakeLut(cli::bake_lut::BakeLutArgs),
+    /// Find the cheapest knob setting of a sky shader within an error budget over a set of
+    /// scenes, and write the shader with those knobs baked.
+    ///
+    /// Sweeps the quality knobs (int uniforms and int consts that bound loops; --knob sets or
+    /// adds one), measures each configuration at every scene (default: sun at 0, 10, 30, 60,
+    /// 90°) against the truth (skyref for Freeman-compatible shaders, else the shader at
+    /// converged knobs in f64), and picks the fastest whose mean (and p99) error stays within
+    /// --max-error at every scene. Writes DIR/<stem>.tuned.gdshader (knobs as consts) and
+    /// DIR/tune.csv; prints the time against the shader's defaults, timed in the same
+    /// interleaved rounds. Exit status: 0 written, 1 a flag or the shader is invalid or no
+    /// configuration is within the budget, 2 no Vulkan adapter or an output cannot be written.
+    Tune(cli::tune::TuneArgs),
 }
 
 fn main() -> ExitCode {
@@ -147,5 +159,6 @@ fn main() -> ExitCode {
         Command::Stress(args) => cli::stress::run(&args),
         Command::Animate(args) => cli::animate::run(&args, &sub),
         Command::BakeLut(args) => cli::bake_lut::run(&args),
+        Command::Tune(args) => cli::tune::run(&args),
     }
 }

@@ -99,15 +99,58 @@ fn quick_stress_original_and_stable() {
     );
 }
 
+/// A shader skyref does not model is no longer refused: it is measured against its own f64
+/// evaluation (issue #13), and `--reference` (skyref's twins) does not apply to it.
 #[test]
-fn stress_refuses_a_shader_that_is_not_freeman_compatible() {
+fn a_shader_that_is_not_freeman_compatible_is_stressed_against_its_f64_evaluation() {
     let dir = scratch("not_freeman");
     let file = dir.join("plain.gdshader");
-    std::fs::write(&file, "shader_type sky;\nuniform float k = 1.0;\nvoid sky() { COLOR = vec3(k); }\n").unwrap();
-    let o = gdsky(&["stress", "--quick", "-o", dir.to_str().unwrap(), file.to_str().unwrap()]);
+    std::fs::write(
+        &file,
+        "shader_type sky;\nuniform float k : hint_range(0.0, 2.0) = 1.0;\nvoid sky() { COLOR = vec3(k) * EYEDIR.y; }\n",
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let o = gdsky(&["stress", "--quick", "-o", out.to_str().unwrap(), file.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(text(&o).contains("evaluated in f64"), "{}", text(&o));
+    let summary = text(&o).lines().find(|l| l.starts_with("summary: ")).map(str::to_string).expect("summary line");
+    assert!(summary.contains("nan_at_defaults=0 inf_at_defaults=0"), "{summary}");
+    let md = std::fs::read_to_string(out.join("stress.md")).expect("stress.md");
+    assert!(md.contains("TIME 1e6 s") && md.contains("camera straight up") && md.contains("k = 0.0"), "{md}");
+    let csv = std::fs::read_to_string(out.join("stress.csv")).expect("stress.csv");
+    assert!(csv.starts_with("group,case,uniform,nan,inf,mean_rel"), "{csv}");
+    let o = gdsky(&["stress", "--quick", "--reference", "fast", "-o", out.to_str().unwrap(), file.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(1), "{}", text(&o));
-    assert!(text(&o).contains("not Freeman-compatible"), "{}", text(&o));
-    assert!(!dir.join("stress.md").exists());
+}
+
+/// night_stars hashes with fract(sin(x) * 43758.5453): the sensitivity measure marks
+/// ill-conditioned channels, most at TIME 1e6 s of the TIME cases; heatmaps are written.
+#[test]
+fn hashed_stars_are_marked_ill_conditioned() {
+    let stars = Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders/night_stars.gdshader");
+    let out = scratch("stars");
+    let o = gdsky(&["stress", "--quick", "-o", out.to_str().unwrap(), stars.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", text(&o));
+    let summary = text(&o).lines().find(|l| l.starts_with("summary: ")).map(str::to_string).expect("summary line");
+    let ill: usize = summary
+        .split_whitespace()
+        .find_map(|kv| kv.strip_prefix("ill_conditioned_cases="))
+        .and_then(|v| v.parse().ok())
+        .expect("ill_conditioned_cases");
+    assert!(ill > 0, "{summary}");
+    let csv = std::fs::read_to_string(out.join("stress.csv")).expect("stress.csv");
+    let ill_at = |case: &str| -> usize {
+        let line = csv.lines().find(|l| l.contains(case)).unwrap_or_else(|| panic!("{case} in {csv}"));
+        line.split(',').nth(10).and_then(|v| v.parse().ok()).expect("ill_conditioned column")
+    };
+    assert!(ill_at("TIME 1e6 s") > ill_at("TIME 1e4 s"), "{csv}");
+    let heatmaps = std::fs::read_dir(&out)
+        .unwrap()
+        .filter_map(Result::ok)
+        .filter(|e| e.file_name().to_string_lossy().starts_with("heatmap-sensitivity"))
+        .count();
+    assert!(heatmaps > 0, "sensitivity heatmaps written");
 }
 
 #[test]

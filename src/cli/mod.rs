@@ -14,6 +14,7 @@ pub mod render;
 pub mod scene;
 pub mod stress;
 pub mod sweep;
+pub mod tune;
 
 use std::path::Path;
 use std::process::ExitCode;

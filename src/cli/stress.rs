@@ -25,6 +25,7 @@ use super::scene::{BUNDLED_NAME, open_gpu};
 use super::sweep::{self, ErrorStats, sci};
 use super::{environment, usage};
 use clap::{Args, ValueEnum};
+use gdsky::measure::any;
 use gdsky::measure::stress::{
     ALTITUDES, Case, HORIZON, HORIZON_FOV, QUICK_ALTITUDES, QUICK_SUN_ELEVATIONS, SUN_ELEVATIONS, View, altitude_text,
     cases, hint_ranges,
@@ -175,6 +176,21 @@ pub fn run(args: &StressArgs) -> ExitCode {
 
 fn stress(args: &StressArgs) -> Result<ExitCode, ExitCode> {
     let input = super::scene::open_input(args.file.as_deref())?;
+    // A shader skyref does not model is measured against its own f64 evaluation.
+    if let Some(file) = input.shader.as_deref()
+        && let Ok(front) = gdsky::check_file(file)
+        && front.shader.as_ref().is_some_and(|s| !gdsky::measure::freeman::compatible(s))
+    {
+        if args.reference.is_some() {
+            return Err(usage(format!(
+                "{}: --reference picks skyref's twin of a Freeman-compatible shader; this one is measured against \
+                 its own f64 evaluation",
+                file.display()
+            )));
+        }
+        let sets = input.scene.as_ref().map(|f| f.uniform_pairs()).unwrap_or_default();
+        return stress_any(args, file, front, sets);
+    }
     let loaded = sweep::load_freeman(input.shader.as_deref())?;
     super::scene::check_scene_uniforms(input.scene.as_ref(), &loaded)?;
     let mut base = FreemanParams::default();
@@ -319,6 +335,264 @@ fn stress(args: &StressArgs) -> Result<ExitCode, ExitCode> {
         return Ok(ExitCode::from(1));
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// Ill-conditioning nudge: each input moves by this many ulps.
+const NUDGE_ULPS: u32 = 4;
+/// Heatmaps of the worst cases written by the generic stress (error and sensitivity each).
+const ANY_HEATMAPS: usize = 3;
+
+/// One generic case's measurements.
+struct AnyOutcome {
+    case: any::Case,
+    /// GPU f32 against the same shader in f64.
+    error: ErrorStats,
+    /// Where the worst channel is: (x, y, channel).
+    worst: Option<(u32, u32, usize)>,
+    sens: any::Sensitivity,
+}
+
+/// The images of a generic case: f32 and f64, base and nudged.
+struct AnyImages {
+    f32: Vec<[f32; 4]>,
+    f64: Vec<[f64; 4]>,
+    f32_nudged: Vec<[f32; 4]>,
+    f64_nudged: Vec<[f64; 4]>,
+}
+
+/// `stress` for a shader that is not Freeman-compatible: each case rendered in f32 on the GPU
+/// and in f64 (the same shader widened, `skyrun::F64Sky`), base and with the built-ins nudged by
+/// a few ulps ([`any::nudged`]); the report ranks the cases by NaN/Inf, error and
+/// ill-conditioning.
+fn stress_any(
+    args: &StressArgs,
+    file: &Path,
+    front: gdsky::FrontendOutput,
+    sets: Vec<(String, String)>,
+) -> Result<ExitCode, ExitCode> {
+    let name = file.display().to_string();
+    let sky = any::Sky::new(front, sets).map_err(usage)?;
+    let shader_info = sky.front.shader.as_ref().ok_or(ExitCode::from(1))?;
+    let (pano, cam) = if args.quick { ((64, 32), (32, 32)) } else { ((256, 128), (128, 128)) };
+    let cases = any::stress_cases(shader_info, args.quick, pano, cam);
+    super::check_output_dir(&args.out_dir, true, &["stress.md", "stress.csv"])?;
+    let gpu = open_gpu()?;
+    let adapter = gpu.adapter_info();
+    let variant = sky.variant(&[]).map_err(usage)?;
+    let c32 = variant.compile(&gpu).map_err(usage)?;
+    let c64 = variant.compile_f64(&gpu).map_err(|e| environment(format!("{name}: no f64 evaluation: {e}")))?;
+    let render = |case: &any::Case| -> Result<AnyImages, ExitCode> {
+        let extra: Vec<(String, String)> = case.uniform.iter().cloned().collect();
+        let m32 = variant.material_with(&c32.lowered, &extra).map_err(usage)?;
+        let m64 = variant.material_with(&c64.sky.lowered, &extra).map_err(usage)?;
+        let b = case.shot.builtins();
+        let n = any::nudged(&b, NUDGE_ULPS);
+        Ok(AnyImages {
+            f32: c32.render_material(&gpu, &case.shot, &b, &m32).map_err(usage)?,
+            f64: c64.render_material(&gpu, &case.shot, &b, &m64).map_err(usage)?,
+            f32_nudged: c32.render_material(&gpu, &case.shot, &n, &m32).map_err(usage)?,
+            f64_nudged: c64.render_material(&gpu, &case.shot, &n, &m64).map_err(usage)?,
+        })
+    };
+    let bar = sweep::progress_bar(cases.len() as u64);
+    let started = std::time::Instant::now();
+    let mut outcomes = Vec::with_capacity(cases.len());
+    for case in &cases {
+        bar.set_message(case.label.clone());
+        let images = render(case)?;
+        let error = sweep::error_stats(&images.f32, &images.f64);
+        let w = case.shot.width as usize;
+        let worst = error.worst.map(|(i, c)| ((i % w) as u32, (i / w) as u32, c));
+        let sens = any::sensitivity(&images.f32, &images.f32_nudged, &images.f64, &images.f64_nudged);
+        outcomes.push(AnyOutcome { case: case.clone(), error, worst, sens });
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    let elapsed = started.elapsed();
+    super::create_output_dir(&args.out_dir)?;
+
+    // Heatmaps: the worst cases by error (NaN/Inf first) and by ill-conditioning.
+    let mut by_error: Vec<&AnyOutcome> = outcomes.iter().collect();
+    by_error.sort_by(|a, b| badness(&b.error).total_cmp(&badness(&a.error)));
+    let mut by_sens: Vec<&AnyOutcome> = outcomes.iter().filter(|o| o.sens.ill_conditioned > 0).collect();
+    by_sens.sort_by(|a, b| ill_fraction(&b.sens).total_cmp(&ill_fraction(&a.sens)));
+    let mut heatmaps: Vec<(String, String)> = Vec::new();
+    for (kind, list) in [("error", &by_error), ("sensitivity", &by_sens)] {
+        for o in list.iter().take(ANY_HEATMAPS) {
+            let images = render(&o.case)?;
+            let (w, h) = (o.case.shot.width, o.case.shot.height);
+            let image = |pixels: Vec<[f32; 4]>| Image::new(w, h, pixels).map_err(environment);
+            let file = format!("heatmap-{kind}-{}.png", o.case.slug.replace(['/', ' '], "_"));
+            let (a, b, what) = if kind == "error" {
+                (image(images.f32)?, image(sweep::narrow(&images.f64))?, "f32 against f64")
+            } else {
+                (image(images.f32_nudged)?, image(images.f32)?, "f32 nudged by 4 ulps against f32")
+            };
+            skyrun::write_heatmap_png(&args.out_dir.join(&file), &a, &b, sweep::FLOOR as f32).map_err(environment)?;
+            heatmaps.push((file, format!("{} — {what}", o.case.label)));
+        }
+    }
+    let md = any_report(&name, &adapter.to_string(), args.quick, elapsed, &outcomes, &heatmaps);
+    let md_path = args.out_dir.join("stress.md");
+    super::write_file(&md_path, md.as_bytes()).map_err(environment)?;
+    let csv_path = args.out_dir.join("stress.csv");
+    super::write_file(&csv_path, any_csv(&outcomes).as_bytes()).map_err(environment)?;
+
+    let at_defaults = || outcomes.iter().filter(|o| o.case.uniform.is_none());
+    let nan: usize = at_defaults().map(|o| o.error.nan).sum();
+    let inf: usize = at_defaults().map(|o| o.error.inf).sum();
+    let worst = by_error.first().map(|o| (o.error.max, o.case.label.clone()));
+    let ill_cases = outcomes.iter().filter(|o| o.sens.ill_conditioned > 0).count();
+    println!("gdsky stress: {name}, {} cases ({}), {:.1?}", outcomes.len(), mode(args.quick), elapsed);
+    println!("adapter  {adapter}");
+    println!("truth    the same shader evaluated in f64 on the device (skyrun::F64Sky), same scene and uniforms");
+    print!("{}", any_table(&outcomes));
+    println!("wrote    {}, {} and {} heatmaps", md_path.display(), csv_path.display(), heatmaps.len());
+    println!(
+        "summary: nan_at_defaults={nan} inf_at_defaults={inf} worst_max={:.6e} worst_case=\"{}\" \
+         ill_conditioned_cases={ill_cases} cases={}",
+        worst.as_ref().map_or(0.0, |w| w.0),
+        worst.as_ref().map_or(String::new(), |w| w.1.clone()),
+        outcomes.len()
+    );
+    if args.quick && nan + inf > 0 {
+        eprintln!("error: NaN/Inf at default uniforms ({nan} NaN, {inf} Inf channels)");
+        return Ok(ExitCode::from(1));
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The share of a case's channels that are ill-conditioned.
+fn ill_fraction(s: &any::Sensitivity) -> f64 {
+    if s.channels == 0 { 0.0 } else { s.ill_conditioned as f64 / s.channels as f64 }
+}
+
+/// Every generic case as a Markdown table.
+fn any_table(outcomes: &[AnyOutcome]) -> String {
+    let mut out = String::from(
+        "| case | NaN / Inf | mean | p99.9 | max | worst at (x, y) | Δ f32 / Δ f64 (mean, 4-ulp nudge) | \
+         ill-conditioned | f32-amplified |\n| --- | --- | --- | --- | --- | --- | --- | --- | --- |\n",
+    );
+    for o in outcomes {
+        let e = &o.error;
+        let measured = e.channels > 0;
+        let at = o.worst.map_or("—".into(), |(x, y, c)| format!("({x}, {y}) {}", ["R", "G", "B"][c]));
+        let pct = |n: usize| {
+            if o.sens.channels == 0 {
+                "—".into()
+            } else {
+                format!("{:.2} %", 100.0 * n as f64 / o.sens.channels as f64)
+            }
+        };
+        let _ = writeln!(
+            out,
+            "| {} | {} / {} | {} | {} | {} | {at} | {:.1e} / {:.1e} | {} | {} |",
+            o.case.label,
+            e.nan,
+            e.inf,
+            sci(e.mean, measured),
+            sci(e.p999, measured),
+            sci(e.max, measured),
+            o.sens.mean32,
+            o.sens.mean64,
+            pct(o.sens.ill_conditioned),
+            pct(o.sens.amplified)
+        );
+    }
+    out
+}
+
+/// The generic report.
+fn any_report(
+    name: &str,
+    adapter: &str,
+    quick: bool,
+    elapsed: std::time::Duration,
+    outcomes: &[AnyOutcome],
+    heatmaps: &[(String, String)],
+) -> String {
+    let mut md = String::new();
+    let _ = writeln!(md, "# gdsky stress: {name}\n");
+    let _ = writeln!(
+        md,
+        "Adapter: {adapter}. Mode: {} ({} cases, {elapsed:.1?}). {name} is not Freeman-compatible, so each case is \
+         measured against the **same shader evaluated in f64** on the device (`skyrun::F64Sky`): the error is f32 \
+         rounding alone, per RGB channel |f32 − f64| / max(|f64|, {:e}). **Sensitivity**: the case is rendered again \
+         with the screen size (so every pixel's EYEDIR), the camera basis, POSITION and TIME each moved up by \
+         {NUDGE_ULPS} ulps, in f32 and in f64; Δ is the mean relative change of the output. A channel is \
+         *ill-conditioned* when it moves by more than {:.0} % in either (a few ulps of input change the colour: \
+         its value is noise that differs between GPUs, e.g. `fract(sin(x) * 43758.5)` at large x), *f32-amplified* \
+         when the f32 output moves more than 10× the f64 one (+1e-4).\n",
+        mode(quick),
+        outcomes.len(),
+        sweep::FLOOR,
+        100.0 * any::ILL_CONDITIONED
+    );
+    let mut worst: Vec<&AnyOutcome> = outcomes.iter().collect();
+    worst.sort_by(|a, b| badness(&b.error).total_cmp(&badness(&a.error)));
+    let _ = writeln!(md, "## Worst cases\n");
+    for o in worst.iter().take(3) {
+        let _ = writeln!(
+            md,
+            "- by error: **{}** — {} NaN, {} Inf, max {}, p99.9 {}",
+            o.case.label,
+            o.error.nan,
+            o.error.inf,
+            sci(o.error.max, o.error.channels > 0),
+            sci(o.error.p999, o.error.channels > 0)
+        );
+    }
+    let mut ill: Vec<&AnyOutcome> = outcomes.iter().filter(|o| o.sens.ill_conditioned > 0).collect();
+    ill.sort_by(|a, b| ill_fraction(&b.sens).total_cmp(&ill_fraction(&a.sens)));
+    for o in ill.iter().take(3) {
+        let _ = writeln!(
+            md,
+            "- by sensitivity: **{}** — {:.2} % of channels ill-conditioned, {:.2} % f32-amplified",
+            o.case.label,
+            100.0 * ill_fraction(&o.sens),
+            100.0 * o.sens.amplified as f64 / o.sens.channels.max(1) as f64
+        );
+    }
+    if ill.is_empty() {
+        let _ = writeln!(md, "- by sensitivity: no case has an ill-conditioned channel");
+    }
+    let _ = writeln!(md, "\n## Every case\n\n{}", any_table(outcomes));
+    if !heatmaps.is_empty() {
+        let _ = writeln!(md, "## Heatmaps\n");
+        for (file, caption) in heatmaps {
+            let _ = writeln!(md, "**{caption}**\n\n![{caption}]({file})\n");
+        }
+    }
+    md
+}
+
+/// Every generic case as CSV: group, case, uniform, nan, inf, mean_rel, p999_rel, max_rel,
+/// sens_f32, sens_f64, ill_conditioned, amplified, channels.
+fn any_csv(outcomes: &[AnyOutcome]) -> String {
+    let mut out = String::from(
+        "group,case,uniform,nan,inf,mean_rel,p999_rel,max_rel,sens_f32,sens_f64,ill_conditioned,amplified,channels\n",
+    );
+    for o in outcomes {
+        let e = &o.error;
+        let uniform = o.case.uniform.as_ref().map(|(n, v)| format!("{n}={v}")).unwrap_or_default();
+        let _ = writeln!(
+            out,
+            "{},\"{}\",\"{uniform}\",{},{},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{},{},{}",
+            o.case.group,
+            o.case.label.replace('"', "'"),
+            e.nan,
+            e.inf,
+            e.mean,
+            e.p999,
+            e.max,
+            o.sens.mean32,
+            o.sens.mean64,
+            o.sens.ill_conditioned,
+            o.sens.amplified,
+            o.sens.channels
+        );
+    }
+    out
 }
 
 fn mode(quick: bool) -> &'static str {

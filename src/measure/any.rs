@@ -147,6 +147,8 @@ pub struct Variant {
 pub struct Compiled {
     /// The pipelines.
     pub shader: SkyShader,
+    /// The lowered module (its material layout).
+    pub lowered: gdsky_naga::Lowered,
     /// The material block filled from the defaults and [`Variant::sets`].
     pub material: Vec<u8>,
 }
@@ -161,8 +163,15 @@ pub struct Compiled64 {
 
 impl Variant {
     fn material(&self, lowered: &gdsky_naga::Lowered) -> Result<Vec<u8>, String> {
+        self.material_with(lowered, &[])
+    }
+
+    /// The material block of `lowered` (this variant's f32 or f64 module) with `extra` uniform
+    /// values over [`Variant::sets`] (a stress case's hint-range end).
+    pub fn material_with(&self, lowered: &gdsky_naga::Lowered, extra: &[(String, String)]) -> Result<Vec<u8>, String> {
         let shader = self.front.shader.as_ref().ok_or("the shader has errors")?;
-        skyrun::material_with_defaults(shader, lowered, &self.sets).map_err(|e| e.to_string())
+        let sets: Vec<(String, String)> = self.sets.iter().chain(extra).cloned().collect();
+        skyrun::material_with_defaults(shader, lowered, &sets).map_err(|e| e.to_string())
     }
 
     /// Lowers, emits WGSL and compiles the f32 shader, with Godot's sub-passes and the
@@ -176,7 +185,8 @@ impl Variant {
             .map_err(|e| e.to_string())?
             .with_texture_defaults(skyrun::texture_defaults(shader, &lowered))
             .with_material_textures(gpu, gdsky_naga::reflect::texture_bindings(shader, &lowered));
-        Ok(Compiled { shader: compiled, material: self.material(&lowered)? })
+        let material = self.material(&lowered)?;
+        Ok(Compiled { shader: compiled, lowered, material })
     }
 
     /// Compiles the f64 evaluation (`skyrun::F64Sky`).
@@ -204,6 +214,21 @@ impl Compiled {
         Ok((r.pixels, time))
     }
 
+    /// Renders `shot` with `builtins` and another `material` block (same layout).
+    pub fn render_material(
+        &self,
+        gpu: &Gpu,
+        shot: &Shot,
+        builtins: &SkyBuiltins,
+        material: &[u8],
+    ) -> Result<Vec<[f32; 4]>, String> {
+        let r = self
+            .shader
+            .render(gpu, shot.projection, shot.width, shot.height, builtins, material)
+            .map_err(|e| e.to_string())?;
+        Ok(r.pixels)
+    }
+
     /// [`Compiled::render_with`] the shot's own built-ins.
     pub fn render(&self, gpu: &Gpu, shot: &Shot) -> Result<(Vec<[f32; 4]>, Duration), String> {
         self.render_with(gpu, shot, &shot.builtins())
@@ -215,6 +240,19 @@ impl Compiled64 {
     pub fn render_with(&self, gpu: &Gpu, shot: &Shot, builtins: &SkyBuiltins) -> Result<Vec<[f64; 4]>, String> {
         self.sky
             .render(gpu, shot.projection, shot.width, shot.height, builtins, &self.material)
+            .map_err(|e| e.to_string())
+    }
+
+    /// Renders `shot` in f64 with `builtins` and another `material` block (same layout).
+    pub fn render_material(
+        &self,
+        gpu: &Gpu,
+        shot: &Shot,
+        builtins: &SkyBuiltins,
+        material: &[u8],
+    ) -> Result<Vec<[f64; 4]>, String> {
+        self.sky
+            .render(gpu, shot.projection, shot.width, shot.height, builtins, material)
             .map_err(|e| e.to_string())
     }
 

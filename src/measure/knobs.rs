@@ -65,74 +65,177 @@ pub struct Discovered {
     pub loop_bound: bool,
 }
 
-/// Every name read in a loop condition of the shader's functions.
+/// Every name a loop condition of the shader's functions depends on: the names read in the
+/// conditions of `for`, `while` and `do … while`, and, through the data flow, the names read
+/// where those are set — a local's initializer and assignments, a parameter's arguments at
+/// every call (`int samples = hits_ground ? view_samples / 2 : view_samples;`,
+/// `get_transmittance(…, sun_samples)` bounding `for (… i < steps …)`). Names are not scoped
+/// (a local of one function and of another are one name): the closure may over-approximate,
+/// which only makes a hint_range'd int or an int const count as a loop bound.
 fn loop_bound_names(shader: &CheckedShader) -> BTreeSet<String> {
-    fn expr_names(e: &Expr, out: &mut BTreeSet<String>) {
+    use std::collections::BTreeMap;
+    fn names(e: &Expr, out: &mut BTreeSet<String>) {
         match &e.kind {
             ExprKind::Ident(id) => {
                 out.insert(id.name.clone());
             }
-            ExprKind::Call { args, .. } | ExprKind::InitList(args) => args.iter().for_each(|a| expr_names(a, out)),
+            ExprKind::Call { args, .. } | ExprKind::InitList(args) => args.iter().for_each(|a| names(a, out)),
             ExprKind::ArrayCtor { args, size, .. } => {
-                args.iter().for_each(|a| expr_names(a, out));
+                args.iter().for_each(|a| names(a, out));
                 if let Some(s) = size {
-                    expr_names(s, out);
+                    names(s, out);
                 }
             }
-            ExprKind::Member { base, .. } => expr_names(base, out),
+            ExprKind::Member { base, .. } => names(base, out),
             ExprKind::MethodCall { base, args, .. } => {
-                expr_names(base, out);
-                args.iter().for_each(|a| expr_names(a, out));
+                names(base, out);
+                args.iter().for_each(|a| names(a, out));
             }
             ExprKind::Index { base, index } => {
-                expr_names(base, out);
-                expr_names(index, out);
+                names(base, out);
+                names(index, out);
             }
-            ExprKind::Unary { operand, .. } => expr_names(operand, out),
-            ExprKind::IncDec { target, .. } => expr_names(target, out),
+            ExprKind::Unary { operand, .. } => names(operand, out),
+            ExprKind::IncDec { target, .. } => names(target, out),
             ExprKind::Binary { lhs, rhs, .. } => {
-                expr_names(lhs, out);
-                expr_names(rhs, out);
+                names(lhs, out);
+                names(rhs, out);
             }
             ExprKind::Assign { target, value, .. } => {
-                expr_names(target, out);
-                expr_names(value, out);
+                names(target, out);
+                names(value, out);
             }
             ExprKind::Ternary { cond, then, otherwise } => {
-                expr_names(cond, out);
-                expr_names(then, out);
-                expr_names(otherwise, out);
+                names(cond, out);
+                names(then, out);
+                names(otherwise, out);
             }
             _ => {}
         }
     }
-    fn stmt(s: &Stmt, out: &mut BTreeSet<String>) {
-        match &s.kind {
-            StmtKind::Block(b) => b.stmts.iter().for_each(|s| stmt(s, out)),
-            StmtKind::If { branches, otherwise } => {
-                branches.iter().for_each(|(_, s)| stmt(s, out));
-                if let Some(o) = otherwise {
-                    stmt(o, out);
+    /// What the walk gathers: loop-condition names, and for each name the names it is set from.
+    struct Flow<'a> {
+        bounds: BTreeSet<String>,
+        from: BTreeMap<String, BTreeSet<String>>,
+        params: &'a BTreeMap<String, Vec<String>>,
+    }
+    impl Flow<'_> {
+        fn edge(&mut self, to: &str, e: &Expr) {
+            let mut n = BTreeSet::new();
+            names(e, &mut n);
+            self.from.entry(to.to_string()).or_default().extend(n);
+        }
+        /// Records assignments and call arguments anywhere inside `e`.
+        fn expr(&mut self, e: &Expr) {
+            match &e.kind {
+                ExprKind::Assign { target, value, .. } => {
+                    if let ExprKind::Ident(id) = &target.kind {
+                        self.edge(&id.name, value);
+                    }
+                    self.expr(value);
                 }
-            }
-            StmtKind::For { cond, body, .. } => {
-                if let Some(c) = cond {
-                    expr_names(c, out);
+                ExprKind::Call { callee, args } => {
+                    if let Some(params) = self.params.get(&callee.name) {
+                        for (p, a) in params.clone().iter().zip(args) {
+                            self.edge(p, a);
+                        }
+                    }
+                    args.iter().for_each(|a| self.expr(a));
                 }
-                stmt(body, out);
+                ExprKind::Binary { lhs, rhs, .. } => {
+                    self.expr(lhs);
+                    self.expr(rhs);
+                }
+                ExprKind::Unary { operand, .. } => self.expr(operand),
+                ExprKind::Ternary { cond, then, otherwise } => {
+                    self.expr(cond);
+                    self.expr(then);
+                    self.expr(otherwise);
+                }
+                ExprKind::Member { base, .. } => self.expr(base),
+                ExprKind::Index { base, index } => {
+                    self.expr(base);
+                    self.expr(index);
+                }
+                ExprKind::MethodCall { base, args, .. } => {
+                    self.expr(base);
+                    args.iter().for_each(|a| self.expr(a));
+                }
+                ExprKind::ArrayCtor { args, .. } | ExprKind::InitList(args) => args.iter().for_each(|a| self.expr(a)),
+                _ => {}
             }
-            StmtKind::While { cond, body } | StmtKind::DoWhile { body, cond } => {
-                expr_names(cond, out);
-                stmt(body, out);
+        }
+        fn stmt(&mut self, s: &Stmt) {
+            match &s.kind {
+                StmtKind::Block(b) => b.stmts.iter().for_each(|s| self.stmt(s)),
+                StmtKind::VarDecl(decl) => {
+                    for d in &decl.declarators {
+                        if let Some(init) = &d.init {
+                            self.edge(&d.name.name, init);
+                            self.expr(init);
+                        }
+                    }
+                }
+                StmtKind::Expr(e) => self.expr(e),
+                StmtKind::Return(Some(e)) => self.expr(e),
+                StmtKind::If { branches, otherwise } => {
+                    for (c, s) in branches {
+                        self.expr(c);
+                        self.stmt(s);
+                    }
+                    if let Some(o) = otherwise {
+                        self.stmt(o);
+                    }
+                }
+                StmtKind::For { init, cond, step, body } => {
+                    if let Some(i) = init {
+                        self.stmt(i);
+                    }
+                    if let Some(c) = cond {
+                        names(c, &mut self.bounds);
+                        self.expr(c);
+                    }
+                    step.iter().for_each(|e| self.expr(e));
+                    self.stmt(body);
+                }
+                StmtKind::While { cond, body } | StmtKind::DoWhile { body, cond } => {
+                    names(cond, &mut self.bounds);
+                    self.expr(cond);
+                    self.stmt(body);
+                }
+                StmtKind::Switch { selector, cases } => {
+                    self.expr(selector);
+                    cases.iter().flat_map(|c| &c.body).for_each(|s| self.stmt(s));
+                }
+                _ => {}
             }
-            StmtKind::Switch { cases, .. } => cases.iter().flat_map(|c| &c.body).for_each(|s| stmt(s, out)),
-            _ => {}
         }
     }
-    let mut out = BTreeSet::new();
+    let params: BTreeMap<String, Vec<String>> = shader
+        .ast
+        .items
+        .iter()
+        .filter_map(|item| match &item.kind {
+            ItemKind::Function(f) => {
+                Some((f.name.name.clone(), f.params.iter().map(|p| p.name.name.clone()).collect()))
+            }
+            _ => None,
+        })
+        .collect();
+    let mut flow = Flow { bounds: BTreeSet::new(), from: BTreeMap::new(), params: &params };
     for item in &shader.ast.items {
         if let ItemKind::Function(f) = &item.kind {
-            f.body.stmts.iter().for_each(|s| stmt(s, &mut out));
+            f.body.stmts.iter().for_each(|s| flow.stmt(s));
+        }
+    }
+    // The closure of the loop-condition names over "is set from".
+    let mut out = flow.bounds.clone();
+    let mut todo: Vec<String> = out.iter().cloned().collect();
+    while let Some(n) = todo.pop() {
+        for m in flow.from.get(&n).into_iter().flatten() {
+            if out.insert(m.clone()) {
+                todo.push(m.clone());
+            }
         }
     }
     out
@@ -303,6 +406,19 @@ mod tests {
             ]
         );
         assert_eq!(k[0].range, Some((1, 8)));
+    }
+
+    #[test]
+    fn loop_bounds_are_followed_through_locals_and_parameters() {
+        let f = front(
+            "shader_type sky;\nuniform int view : hint_range(1, 64) = 8;\nuniform int sun : hint_range(1, 64) = 4;\n\
+             uniform int look = 2;\nfloat march(int steps) { float a = 0.0; for (int i = 0; i < steps; i++) { a += 1.0; } \
+             return a; }\nvoid sky() { int n = view / 2; float a = 0.0; for (int i = 0; i < n; i++) { a += 1.0; }\n\
+             COLOR = vec3(a + march(sun) + float(look)); }\n",
+        );
+        let k = discover(f.shader.as_ref().expect("checks"));
+        let bound: Vec<(&str, bool)> = k.iter().map(|d| (d.name.as_str(), d.loop_bound)).collect();
+        assert_eq!(bound, [("view", true), ("sun", true)]);
     }
 
     #[test]
