@@ -1,8 +1,11 @@
 //! The corpus (issue #14, build item 6): sky shaders from public Godot 4 projects under
-//! licences that allow redistribution, in `tests/corpus/`, each saved byte for byte as
-//! `<project>__<name>.gdshader` with a sidecar `<project>__<name>.toml` naming its origin
-//! (repository, path, commit), licence and copyright, and the material values its project gives
-//! it where one was found. The notices are in `tests/corpus/LICENSES.md`.
+//! permissive licences. `tests/corpus/` holds one sidecar per shader, `<project>__<name>.toml`,
+//! naming its origin (repository, path, commit), licence and copyright, and the material values
+//! its project gives it where one was found. The shaders themselves are not copied into this
+//! repository (they were found through the project's search library, whose terms are that facts
+//! carry over and code does not): `scripts/fetch-corpus.sh DIR` downloads each from its
+//! repository at the recorded commit, and the pipeline test below runs on them
+//! (`GDSKY_CORPUS_DIR=DIR cargo test --test corpus -- --ignored`).
 //!
 //! Every corpus shader goes through the whole pipeline:
 //!
@@ -45,8 +48,19 @@ enum Stage {
 /// The shaders allowed to fail: (corpus name, stage, text the failure's reason contains).
 const EXPECTED_FAILURES: &[(&str, Stage, &str)] = &[];
 
+/// The sidecars: provenance (repository, path, commit, licence) and material values, facts
+/// about each shader. The shaders themselves are not in this repository: they stay in their
+/// projects and are fetched from there at the recorded commits (`scripts/fetch-corpus.sh DIR`).
 fn corpus_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/corpus")
+}
+
+/// Where `scripts/fetch-corpus.sh` put the shaders (`GDSKY_CORPUS_DIR`), files named as their
+/// sidecars (`<project>__<name>.gdshader`, includes as the sidecar's `[includes]` say).
+fn fetched_dir() -> PathBuf {
+    std::env::var_os("GDSKY_CORPUS_DIR").map(PathBuf::from).unwrap_or_else(|| {
+        panic!("set GDSKY_CORPUS_DIR to the folder `bash scripts/fetch-corpus.sh DIR` filled (the shaders are fetched from their projects, not kept here)")
+    })
 }
 
 fn scratch(name: &str) -> PathBuf {
@@ -88,7 +102,7 @@ fn entries() -> Vec<Entry> {
     let mut names: Vec<String> = std::fs::read_dir(corpus_dir())
         .expect("tests/corpus is listable")
         .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
-        .filter_map(|f| f.strip_suffix(".gdshader").map(str::to_string))
+        .filter_map(|f| f.strip_suffix(".toml").map(str::to_string))
         .collect();
     names.sort();
     names
@@ -146,11 +160,13 @@ fn run(gpu: &Gpu, entry: &Entry) -> Outcome {
     let mut outcome = Outcome { reads_time: None, samplers: None, failure: None };
     let dir = scratch(&entry.name);
     let path = dir.join(&entry.file_name);
-    std::fs::copy(corpus_dir().join(format!("{}.gdshader", entry.name)), &path).expect("stages the shader");
+    let fetched = fetched_dir();
+    std::fs::copy(fetched.join(format!("{}.gdshader", entry.name)), &path)
+        .unwrap_or_else(|e| panic!("{}: not fetched into {} ({e})", entry.name, fetched.display()));
     for (relative, file) in &entry.includes {
         let to = dir.join(relative);
         std::fs::create_dir_all(to.parent().expect("a parent")).expect("include dir");
-        std::fs::copy(corpus_dir().join(file), &to).unwrap_or_else(|e| panic!("{file}: {e}"));
+        std::fs::copy(fetched.join(file), &to).unwrap_or_else(|e| panic!("{file}: {e}"));
     }
 
     // Convert.
@@ -253,25 +269,16 @@ fn run(gpu: &Gpu, entry: &Entry) -> Outcome {
 }
 
 #[test]
-fn corpus_sidecars_and_notices_are_complete() {
+fn corpus_sidecars_are_complete() {
     let entries = entries();
     assert!(!entries.is_empty(), "the corpus is empty");
-    let notices = std::fs::read_to_string(corpus_dir().join("LICENSES.md")).expect("tests/corpus/LICENSES.md");
-    let projects: BTreeSet<&str> = entries.iter().map(|e| e.project.as_str()).collect();
-    for project in projects {
-        assert!(notices.contains(&format!("## {project}\n")), "LICENSES.md has no section for {project}");
-    }
-    for entry in &entries {
-        for (_, file) in &entry.includes {
-            assert!(corpus_dir().join(file).is_file(), "{}: include {file} is missing", entry.name);
-        }
-    }
     for (name, _, _) in EXPECTED_FAILURES {
         assert!(entries.iter().any(|e| e.name == *name), "EXPECTED_FAILURES names {name}, which is not in the corpus");
     }
 }
 
 #[test]
+#[ignore = "needs the shaders fetched from their projects: bash scripts/fetch-corpus.sh DIR, then GDSKY_CORPUS_DIR=DIR cargo test --test corpus -- --ignored"]
 fn corpus_converts_validates_and_renders_finite() {
     set_runtime_dir();
     let gpu = Gpu::new().unwrap_or_else(|e| panic!("this test needs a Vulkan adapter: {e}"));
