@@ -46,8 +46,10 @@
 //! (`render_pass` 1 and 2, which the full pass reads as HALF_RES_COLOR/QUARTER_RES_COLOR) keep
 //! their alpha, so the full pass computes what it computes without the trace; a non-finite value
 //! made in a sub-pass is reported where the full pass first computes with it. The full pass's
-//! alpha is otherwise always 0 (Godot's), so nothing is lost; a host reads the id from the alpha
-//! of an Rgba32Float target.
+//! alpha is otherwise always 0 (Godot's), so nothing is lost there; a cubemap face's alpha (which
+//! Godot keeps) is replaced too, so a host renders the instrumented module only for the ids and
+//! takes the colour from the shader's own module. It reads the id from the alpha of an
+//! Rgba32Float target (`gdsky render --trace-nonfinite` does).
 //!
 //! **Limits.** `?:` and `mix`-like selects whose operands have no side effects are lowered as
 //! naga `Select`s that evaluate both operands (as a GPU does), so a NaN made in the branch not
