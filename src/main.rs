@@ -77,8 +77,10 @@ enum Command {
     /// renders after a warm-up) and measures it against skyref's converged f64 image (1024/256
     /// samples, cached on disk): mean, p99 and max relative error in linear radiance, mean error
     /// after tone mapping. Writes DIR/bench.csv and DIR/bench.png (log-log, Pareto front
-    /// highlighted) and prints the front. Exit status: 0 written, 1 a flag is invalid or FILE is
-    /// not Freeman-compatible, 2 no Vulkan adapter or an output cannot be written.
+    /// highlighted) and prints the front. A shader that is not Freeman-compatible is swept over
+    /// its quality knobs (int uniforms and int consts bounding loops) and measured against its
+    /// sampling truth: itself at converged knobs, in f64 (the convergence is printed). Exit
+    /// status: 0 written, 1 a flag is invalid, 2 no Vulkan adapter or an output cannot be written.
     Bench(cli::bench::BenchArgs),
     /// Stress-test the numerical stability of a Freeman-compatible sky, in f32 on the adapter and
     /// on the CPU, against skyref in f64.
@@ -88,9 +90,10 @@ enum Command {
     /// ends of its hint_range; reports NaN/Inf counts and the worst relative errors with where they
     /// occur, for the shader on the GPU (f32) and for skyref's own f32 on the CPU. Writes
     /// DIR/stress.md, DIR/stress.csv and heatmaps; prints a `summary:` line. --quick runs a small
-    /// subset (for CI). Exit status: 0 report written, 1 a flag is invalid, FILE is not
-    /// Freeman-compatible, or --quick found NaN/Inf at default uniforms, 2 no Vulkan adapter or an
-    /// output cannot be written.
+    /// subset (for CI). Any other shader is measured against its own f64 evaluation over sun,
+    /// camera, TIME (to 1e6 s), views and hint-range ends, with a few-ulp sensitivity measure that
+    /// marks ill-conditioned pixels. Exit status: 0 report written, 1 a flag is invalid or --quick
+    /// found NaN/Inf at default uniforms, 2 no Vulkan adapter or an output cannot be written.
     Stress(cli::stress::StressArgs),
     /// Render a scene file's sequence of frames (the sun over a day, TIME advancing, the camera
     /// moving), re-rendering a frame only when an input the shader reads has changed.

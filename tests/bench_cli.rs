@@ -181,3 +181,39 @@ fn the_integral_truth_cannot_take_sample_counts_and_a_second_scene_is_refused() 
     assert_eq!(o.status.code(), Some(1), "{}", text(&o));
     assert!(text(&o).contains("only the first FILE can be a scene file"), "{}", text(&o));
 }
+
+/// A shader that is not Freeman-compatible is benched against its sampling truth: its const
+/// loop bound is found and swept (baked per configuration), the convergence is printed, and the
+/// CSV has the knob's column; the error falls as the steps rise (a midpoint sum, error ~1/N²).
+#[test]
+fn a_shader_that_is_not_freeman_compatible_is_benched_against_its_sampling_truth() {
+    let dir = scratch("any");
+    let file = dir.join("riemann.gdshader");
+    std::fs::write(
+        &file,
+        "shader_type sky;\nconst int STEPS = 16;\nuniform int unused_preset : hint_range(0, 3) = 1;\n\
+         void sky() { float a = 0.0;\nfor (int i = 0; i < STEPS; i++) { a += exp(-4.0 * (float(i) + 0.5) / float(STEPS)); }\n\
+         COLOR = vec3(a / float(STEPS)) * (1.5 + EYEDIR.y); }\n",
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let args = ["bench", file.to_str().unwrap(), "--size", "16x8", "--runs", "1", "-o", out.to_str().unwrap()];
+    let o = gdsky(&args, &dir);
+    assert!(o.status.success(), "{}", text(&o));
+    let t = text(&o);
+    assert!(t.contains("the sampling truth") && t.contains("convergence"), "{t}");
+    assert!(t.contains("  STEPS "), "the convergence table names the knob:\n{t}");
+    let csv = std::fs::read_to_string(out.join("bench.csv")).expect("bench.csv");
+    let lines: Vec<&str> = csv.lines().collect();
+    assert!(lines[0].starts_with("shader,STEPS,time_ms"), "only the loop bound is swept:\n{csv}");
+    let mean = |steps: &str| -> f64 {
+        let line =
+            lines.iter().find(|l| l.split(',').nth(1) == Some(steps)).unwrap_or_else(|| panic!("{steps}: {csv}"));
+        line.split(',').nth(8).and_then(|v| v.parse().ok()).expect("mean_rel")
+    };
+    assert!(mean("2") > mean("8") && mean("8") > mean("32"), "{csv}");
+    assert!(out.join("bench.png").exists());
+    // skyref's truth flags do not apply to it.
+    let o = gdsky(&["bench", file.to_str().unwrap(), "--truth", "integral", "-o", out.to_str().unwrap()], &dir);
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+}
