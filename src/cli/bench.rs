@@ -800,7 +800,7 @@ pub fn convergence_table(c: &any::Converged) -> String {
             s.change.p99,
             s.change.max,
             s.f32_vs_f64,
-            if s.rejected { "  rejected: the f64 image left the f32 one" } else { "" }
+            if s.rejected { "  rejected: the f64 image left the f32 one or gained NaN/Inf" } else { "" }
         ));
     }
     out
