@@ -46,6 +46,10 @@ pub struct RenderArgs {
     scene: SceneArgs,
     #[command(flatten)]
     skip: SkipArgs,
+    /// Godot's sky debanding: `godot` adds its noise to shaders that declare `render_mode
+    /// use_debanding` (docs/godot.md, "Debanding"); `none` leaves COLOR as the shader writes it.
+    #[arg(long, value_enum, default_value_t = super::debanding::DebandingArg::None)]
+    debanding: super::debanding::DebandingArg,
 }
 
 pub fn run(args: &RenderArgs, matches: &ArgMatches) -> ExitCode {
@@ -82,6 +86,7 @@ fn render(args: &RenderArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
         }
     })?;
     check_scene_uniforms(input.scene.as_ref(), &loaded)?;
+    super::debanding::apply(&mut loaded, args.debanding)?;
     loaded.textures = scene_args.textures(input.scene.as_ref(), &loaded)?;
     if args.bake_scene {
         let mut names: Vec<&String> = loaded.baked.keys().collect();
