@@ -403,7 +403,8 @@ macro_rules! freeman_fast {
                     // A ray that meets the ground ends on the sphere: c = 0 exactly there. Formed
                     // from t, c is rounding noise of order ulp(c₀) (hundreds of m² from 1 km up),
                     // which decides the shadow test of a ground point under a grazing sun.
-                    let c_end = if hits_ground && i == samples - 1 { 0.0 } else { t_end * (t_end + 2.0 * ray_b) + ray_c };
+                    let c_end =
+                        if hits_ground && i == samples - 1 { 0.0 } else { t_end * (t_end + 2.0 * ray_b) + ray_c };
                     let h_end = self.altitude_of(c_end);
                     let rho_end = ((-h_end * inverse_scales.0).exp(), (-h_end * inverse_scales.1).exp());
                     // Each layer's depth over the step, exact for a density exponential in t

@@ -103,9 +103,9 @@
 
 pub mod converged;
 mod fast_impl;
+pub mod lut;
 mod params;
 mod precision;
-pub mod lut;
 pub mod truth;
 
 pub use params::{FreemanParams, Projection, Scene, UniformMut, cube_face_basis};

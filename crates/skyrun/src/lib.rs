@@ -139,14 +139,16 @@ pub use material::{
     MaterialError, UniformValue, freeman_material, freeman_values, material_bytes, material_with_defaults,
     texture_defaults,
 };
-pub use metrics::{Metrics, PixelDiff, STATS_GRID, Stats, compare, compare_stats, luminance, region_stats, worst_pixels};
+pub use metrics::{
+    Metrics, PixelDiff, STATS_GRID, Stats, compare, compare_stats, luminance, region_stats, worst_pixels,
+};
 pub use render::{RenderError, Rendered, SkyShader, SubPasses, fragment_entry, render, sub_pass_size};
 pub use skip::{MAX_MASK_BYTES, MaskError, OCCLUDED, Occluder, RenderOptions, SkyResolution, UpsampleFilter};
 pub use skyref::Projection;
-pub use wide::{F64Error, F64Sky, render_f64};
 pub use textures::{
     MAX_TEXTURE_FILE_BYTES, MAX_TEXTURE_SIDE, TexelFormat, TextureData, TextureError, check_texture, read_texture,
 };
+pub use wide::{F64Error, F64Sky, render_f64};
 
 #[cfg(test)]
 mod tests;
