@@ -512,21 +512,12 @@ macro_rules! freeman_fast {
             width: u32,
             height: u32,
         ) -> Vec<[$T; 4]> {
-            if width == 0 || height == 0 || table.width < 2 || table.height < 2 {
+            if table.width < 2 || table.height < 2 {
                 return Vec::new();
             }
-            let uniforms = Uniforms::from(params);
-            let sun = v3(scene.light0_direction());
-            let w = width as usize;
-            let mut out = vec![[0.0; 4]; w * height as usize];
-            out.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
-                for (x, px) in row.iter_mut().enumerate() {
-                    let d = crate::$T::eyedir(scene, projection, x as u32, y as u32, width, height);
-                    let c = uniforms.sky_lut(table, scene.light_enabled, sun, s(scene.position.y), d);
-                    *px = [c.x, c.y, c.z, 0.0];
-                }
-            });
-            out
+            render_with(params, scene, projection, width, height, |u, sun, d| {
+                u.sky_lut(table, scene.light_enabled, sun, s(scene.position.y), d)
+            })
         }
 
         /// Renders a `width`×`height` image of the fast sky, pixels mapped as
@@ -538,6 +529,20 @@ macro_rules! freeman_fast {
             width: u32,
             height: u32,
         ) -> Vec<[$T; 4]> {
+            render_with(params, scene, projection, width, height, |u, sun, d| {
+                u.sky(scene.light_enabled, sun, s(scene.position.y), d)
+            })
+        }
+
+        /// The image loop both variants share: `sky(uniforms, sun, eyedir)` per pixel.
+        fn render_with(
+            params: &FreemanParams,
+            scene: &Scene,
+            projection: Projection,
+            width: u32,
+            height: u32,
+            sky: impl Fn(&Uniforms, $V3, $V3) -> $V3 + Sync,
+        ) -> Vec<[$T; 4]> {
             if width == 0 || height == 0 {
                 return Vec::new();
             }
@@ -548,7 +553,7 @@ macro_rules! freeman_fast {
             out.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
                 for (x, px) in row.iter_mut().enumerate() {
                     let d = crate::$T::eyedir(scene, projection, x as u32, y as u32, width, height);
-                    let c = uniforms.sky(scene.light_enabled, sun, s(scene.position.y), d);
+                    let c = sky(&uniforms, sun, d);
                     *px = [c.x, c.y, c.z, 0.0];
                 }
             });
