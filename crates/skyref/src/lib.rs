@@ -86,6 +86,19 @@
 //! 0.11) over the same panorama; that is the shader's quadrature error, which a faithful port
 //! reproduces and the converged mode exposes.
 //!
+//! ## The truth
+//!
+//! [`truth`] evaluates the integrals themselves rather than refining the shader's sums:
+//! breakpoints wherever the integrand has a kink or a jump (the ray's lowest point, the ozone
+//! tent's kinks, the planet's shadow and the cylinders where a sun ray's lowest point crosses a
+//! kink), Gauss–Legendre optical depths on graded panels, and along the view ray graded midpoint
+//! sums at N and 2N steps combined by Richardson extrapolation. Doubling its steps and panels
+//! (`truth::convergence_check`, 32×16 panorama) moves it by 1.0e-7 max at sun 10° and 45°, and
+//! by 4.9e-6 max / 4.4e-7 mean with the sun 4° below the horizon; the converged mode above
+//! (1024/256) is 5.3e-3 max / 5.5e-4 mean away from it at sun 10°. Unit test `truth_converges`.
+//! [`fast`] is the Rust twin of `shaders/freeman_fast.gdshader` and, with a table from
+//! [`lut::bake`], of `shaders/freeman_lut.gdshader`, in f32 and f64.
+//!
 //! ## Example
 //!
 //! ```
