@@ -151,3 +151,34 @@ fn bad_budgets_and_knobs_are_wrong_input() {
         assert_eq!(o.status.code(), Some(1), "{extra:?}: {}", text(&o));
     }
 }
+
+/// The two tuned Freeman shaders in docs/measure (mean ≤ 5 % and ≤ 1 % over sun 0–90°) pass the
+/// demo's pixel test against skyref's f32 port at the sample counts baked into them.
+#[test]
+fn the_documented_tuned_freeman_shaders_pass_the_pixel_test() {
+    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
+        // SAFETY: set before this test starts the Vulkan loader; only the loader reads it.
+        unsafe { std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir()) };
+    }
+    let gpu = skyrun::Gpu::new().expect("a Vulkan adapter");
+    for budget in ["5pct", "1pct"] {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join(format!("docs/measure/tune_freeman_{budget}/freeman_sky.tuned.gdshader"));
+        let source = std::fs::read_to_string(&path).expect("the documented tuned shader");
+        let baked = |name: &str| -> i32 {
+            let at = source.find(&format!("const int {name} = ")).unwrap_or_else(|| panic!("{name} baked in {budget}"));
+            let rest = &source[at + format!("const int {name} = ").len()..];
+            rest[..rest.find(';').expect(";")].trim().parse().expect("an int")
+        };
+        let params = FreemanParams::default().with_samples(baked("view_samples"), baked("sun_samples"));
+        let size = (48, 24);
+        for sun_deg in [10.0, 60.0] {
+            let scene = Scene { sun_elevation_deg: sun_deg, ..Scene::default() };
+            let image = render_file(&gpu, &path, &scene, size);
+            let reference = skyref::f32::render(&params, &scene, Projection::Panorama, size.0, size.1);
+            let m = skyrun::compare(&image, &reference, 1e-4);
+            assert_eq!(m.nan + m.inf, 0, "{budget}, sun {sun_deg}°");
+            assert!(m.p999_rel <= 1e-3, "{budget}, sun {sun_deg}°: p99.9 {:e}", m.p999_rel);
+        }
+    }
+}
