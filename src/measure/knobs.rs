@@ -9,7 +9,7 @@
 //! different material, one module for all. A const knob is part of the code: there is no block
 //! slot to write. gdsky-naga's baking (`lower_with`'s map, what `convert --set` uses) replaces
 //! *uniforms* by constants, and consts are folded by the checker before lowering (array sizes
-//! may depend on them), so they cannot go through that map. Instead [`specialize`] rewrites the
+//! may depend on them), so they cannot go through that map. Instead [`specialize_source`] rewrites the
 //! const's initializer in the shader's own source text (located through the preprocessor's map,
 //! so the edit lands in the user's file) and the shader is checked again: one module per
 //! configuration, exactly the shader the user would get by editing the number. The same rewrite

@@ -40,8 +40,9 @@
 //!
 //! [`knobs::discover`] finds the knobs; [`knobs::specialize_source`] bakes a const knob by
 //! rewriting its initializer in the user's source (consts are folded by the checker, so the
-//! uniform-baking map of `lower_with` cannot carry them). [`any::tune`] searches the knob grid
-//! for the cheapest setting within an error budget at every scene of a set.
+//! uniform-baking map of `lower_with` cannot carry them). [`any::cheapest`] picks, from the
+//! measured knob grid, the cheapest setting within an error budget at every scene of a set
+//! (`gdsky tune`).
 //!
 //! Timing is never asserted on by the tests; only the shape of the results is.
 
