@@ -791,19 +791,8 @@ pub fn open_gpu() -> Result<skyrun::Gpu, ExitCode> {
     }
 }
 
-/// Joins same-sized views left to right into one image (the cubemap strip).
-pub fn strip(views: Vec<Vec<[f32; 4]>>, width: u32, height: u32) -> Result<Image, skyrun::ImageError> {
-    let n = views.len();
-    let (w, h) = (width as usize, height as usize);
-    let mut pixels = vec![[0.0; 4]; n * w * h];
-    for (i, view) in views.iter().enumerate() {
-        for (y, row) in view.chunks_exact(w).enumerate() {
-            let at = y * n * w + i * w;
-            pixels[at..at + w].copy_from_slice(row);
-        }
-    }
-    Image::new(width * n as u32, height, pixels)
-}
+/// Joins same-sized views left to right into one image (the cubemap strip): the library's.
+pub use gdsky::measure::freeman::strip;
 
 /// Checks, before any work, that the EXR and the PNG preview can be written where asked: the
 /// directory must exist (`render`, `reference` and `oracle` do not create it: a typo in `-o` is
