@@ -392,20 +392,6 @@ fn spec_constants(module: &naga::Module, options: &naga::back::spv::Options) -> 
         .map_err(|m| (m, false))?;
     let mut words = naga::back::spv::write_vec(&copy, &info, options, None)
         .map_err(|e| (format!("naga's SPIR-V writer failed: {e}"), false))?;
-    // The instructions after the five header words: (start, opcode, length).
-    let instructions = |words: &[u32]| {
-        let mut at = 5;
-        let mut list = Vec::new();
-        while at < words.len() {
-            let (len, opcode) = ((words[at] >> 16) as usize, words[at] & 0xffff);
-            if len == 0 || at + len > words.len() {
-                break;
-            }
-            list.push((at, opcode, len));
-            at += len;
-        }
-        list
-    };
     let list = instructions(&words);
     let scalar_type = |words: &[u32], kind: (bool, bool)| -> Vec<u32> {
         list.iter()
@@ -445,18 +431,81 @@ fn spec_constants(module: &naga::Module, options: &naga::back::spv::Options) -> 
         words[at + 3] = *default_bits;
         decorations.extend([(4 << 16) | op::DECORATE, result, op::SPEC_ID, *id]);
     }
-    // Into the annotations: after the last one before the first function, else before the first
-    // type declaration.
-    let list = instructions(&words);
+    let at =
+        annotations_end(&words).ok_or_else(|| ("the written SPIR-V has no type declarations".to_string(), false))?;
+    words.splice(at..at, decorations);
+    Ok(words)
+}
+
+/// The instructions after the five header words of a SPIR-V binary: (start, opcode, length).
+/// Stops at a malformed length (the binaries come from naga's writer; its validator and
+/// `spirv-val` in the tests judge them).
+fn instructions(words: &[u32]) -> Vec<(usize, u32, usize)> {
+    let mut at = 5;
+    let mut list = Vec::new();
+    while at < words.len() {
+        let (len, opcode) = ((words[at] >> 16) as usize, words[at] & 0xffff);
+        if len == 0 || at + len > words.len() {
+            break;
+        }
+        list.push((at, opcode, len));
+        at += len;
+    }
+    list
+}
+
+/// Where a new annotation goes: after the last annotation before the first function, else
+/// before the first type declaration (SPIR-V's logical layout puts annotations between the
+/// debug instructions and the types).
+fn annotations_end(words: &[u32]) -> Option<usize> {
+    let list = instructions(words);
     let functions_start = list.iter().find(|i| i.1 == op::FUNCTION).map_or(words.len(), |i| i.0);
-    let at = list
-        .iter()
+    list.iter()
         .rfind(|i| i.0 < functions_start && op::is_annotation(i.1))
         .map(|i| i.0 + i.2)
         .or_else(|| list.iter().find(|i| op::is_type(i.1)).map(|i| i.0))
-        .ok_or_else(|| ("the written SPIR-V has no type declarations".to_string(), false))?;
-    words.splice(at..at, decorations);
-    Ok(words)
+}
+
+/// Decorates the result of every floating-point arithmetic instruction of a SPIR-V binary
+/// `NoContraction`, so that the driver evaluates each operation as written and rounded.
+///
+/// Why: SPIR-V lets a consumer treat undecorated arithmetic as real-number algebra, and Mesa
+/// does (NIR's inexact algebraic rules apply to every ALU instruction not marked exact, and
+/// `NoContraction` is what marks it). Measured on lavapipe (Mesa 22.3), undecorated, every
+/// error-free transformation folds to zero: the two-sum error `(a − (s − (s − a))) + (b − (s −
+/// a))`, `x − ((1 + x) − 1)` and even `fma(a, b, −a·b)`. The f64 routines
+/// ([`crate::F64_MATH_WGSL`]) and the f64 evaluation of a user's shader rely on those terms,
+/// so the f64 modules carry this decoration (see `skyrun::F64Sky`, which hands the binary to
+/// the driver as is). The GLSL.std.450 `Fma` and every other extended instruction are
+/// decorated too: Mesa reads the decoration on any ALU result.
+pub fn exact_arithmetic(words: &[u32]) -> Vec<u32> {
+    // FNegate, FAdd, FSub, FMul, FDiv, FRem, FMod, VectorTimesScalar, MatrixTimesScalar,
+    // VectorTimesMatrix, MatrixTimesVector, MatrixTimesMatrix, Dot, ExtInst.
+    const ARITHMETIC: [u32; 14] = [127, 129, 131, 133, 136, 140, 141, 142, 143, 144, 145, 146, 148, 12];
+    const NO_CONTRACTION: u32 = 42;
+    let mut float_types = std::collections::HashSet::new();
+    let list = instructions(words);
+    let mut decorations = Vec::new();
+    for &(at, opcode, len) in &list {
+        match opcode {
+            op::TYPE_FLOAT if len >= 3 => {
+                float_types.insert(words[at + 1]);
+            }
+            // OpTypeVector and OpTypeMatrix of a float component type are float types too.
+            23 | 24 if len >= 4 && float_types.contains(&words[at + 2]) => {
+                float_types.insert(words[at + 1]);
+            }
+            _ if ARITHMETIC.contains(&opcode) && len >= 3 && float_types.contains(&words[at + 1]) => {
+                decorations.extend([(3 << 16) | op::DECORATE, words[at + 2], NO_CONTRACTION]);
+            }
+            _ => {}
+        }
+    }
+    let mut out = words.to_vec();
+    if let Some(at) = annotations_end(words) {
+        out.splice(at..at, decorations);
+    }
+    out
 }
 
 /// Completes what naga 30's SPIR-V front end leaves out of valid SPIR-V, so that its validator

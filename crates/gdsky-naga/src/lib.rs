@@ -28,7 +28,7 @@ pub mod trace;
 mod widen;
 pub mod wrapper;
 
-pub use emit::{EmitError, reread_wgsl, to_spirv, to_wgsl};
+pub use emit::{EmitError, exact_arithmetic, reread_wgsl, to_spirv, to_wgsl};
 pub use lower::{GLOBAL_UNIFORM_GROUP, MATERIAL_GROUP, TextureSlot, UniformSlot};
 pub use widen::{F64_MATH_WGSL, F64Output};
 pub use wrapper::{Debanding, Projection};

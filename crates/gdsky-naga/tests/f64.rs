@@ -1,6 +1,6 @@
 //! The f64 evaluation (`gdsky_naga::lower_f64`): every shader gdsky converts widens to a module
-//! naga validates with FLOAT64, whose SPIR-V `spirv-val` accepts, and whose f32 lowering (and so
-//! the snapshots) does not change.
+//! naga validates with FLOAT64, whose SPIR-V (decorated `NoContraction`, as the driver gets it)
+//! `spirv-val` accepts, and whose f32 lowering (and so the snapshots) does not change.
 
 use gdsky_naga::{F64Output, lower_f64, to_spirv};
 use std::collections::HashMap;
@@ -59,6 +59,8 @@ fn every_shader_widens_validates_and_passes_spirv_val() {
                 Ok(lowered) => match to_spirv(&lowered) {
                     Err(e) => failures.push(format!("{name} {output:?}: SPIR-V: {e:?}")),
                     Ok(words) => {
+                        // The binary the driver gets: with the exact-arithmetic decorations.
+                        let words = gdsky_naga::exact_arithmetic(&words);
                         if let Err(e) = spirv_val(&words, &name) {
                             failures.push(format!("{name} {output:?}: spirv-val: {e}"));
                         }

@@ -69,7 +69,11 @@ impl Gpu {
         // GPU timestamps time the passes themselves (`Rendered::gpu_time`) where the adapter
         // has them (lavapipe does); f64 arithmetic in shaders (`shaderFloat64`, lavapipe has
         // it) lets the f64 evaluation run (`F64Sky`). Nothing else is optional.
-        let required_features = adapter.features() & (wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::SHADER_F64);
+        // Passthrough shaders hand the f64 modules to the driver as written: wgpu's own path
+        // re-reads SPIR-V with naga and drops the `NoContraction` decorations they depend on
+        // (see `gdsky_naga::exact_arithmetic`).
+        let required_features = adapter.features()
+            & (wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::SHADER_F64 | wgpu::Features::PASSTHROUGH_SHADERS);
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("skyrun"),
             required_features,
@@ -92,6 +96,12 @@ impl Gpu {
     /// [`crate::F64Sky`] needs.
     pub fn has_f64(&self) -> bool {
         self.device.features().contains(wgpu::Features::SHADER_F64)
+    }
+
+    /// Whether SPIR-V can be given to the driver as is (`Features::PASSTHROUGH_SHADERS`), as
+    /// [`crate::F64Sky`] needs for its exact arithmetic.
+    pub fn has_passthrough(&self) -> bool {
+        self.device.features().contains(wgpu::Features::PASSTHROUGH_SHADERS)
     }
 
     /// The adapter this device runs on.

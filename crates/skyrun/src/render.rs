@@ -224,11 +224,66 @@ impl SkyShader {
         Self::with_source(gpu, wgsl, wgpu::ShaderSource::SpirV(spirv.into()), sub_passes)
     }
 
+    /// Like [`SkyShader::from_spirv`], but hands `spirv` to the driver as is, bypassing wgpu's
+    /// re-reading of SPIR-V through naga, which would drop decorations naga's IR cannot hold
+    /// (`NoContraction`: the f64 evaluation's exact arithmetic, see
+    /// `gdsky_naga::exact_arithmetic`). `entry_points` names the module's entry points.
+    ///
+    /// The binary must be valid SPIR-V whose interface matches `wgsl`'s: gdsky's f64 modules
+    /// are naga-validated and re-read before they get here (`gdsky_naga::to_spirv`), and only
+    /// gain decorations afterwards; `spirv-val` checks them in the tests. Errors: the device
+    /// has no passthrough shaders ([`Gpu::has_passthrough`]).
+    pub fn from_spirv_exact(
+        gpu: &Gpu,
+        wgsl: &str,
+        spirv: &[u32],
+        entry_points: &[String],
+        sub_passes: SubPasses,
+    ) -> Result<SkyShader, RenderError> {
+        if !gpu.has_passthrough() {
+            return Err(RenderError::Wgpu {
+                kind: "missing feature",
+                message: "the device cannot take SPIR-V as is (wgpu Features::PASSTHROUGH_SHADERS), which exact \
+                          f64 arithmetic needs"
+                    .into(),
+            });
+        }
+        let entry_points: Vec<_> = entry_points
+            .iter()
+            .map(|name| wgpu::PassthroughShaderEntryPoint { name: name.clone().into(), workgroup_size: (0, 0, 0) })
+            .collect();
+        Self::with_module(gpu, wgsl, sub_passes, || {
+            // SAFETY: the binary is a naga-validated module written by naga's SPIR-V back end and
+            // re-read by its front end (`gdsky_naga::to_spirv`), with `NoContraction` decorations
+            // added, which change no interface; its resources are `wgsl`'s, from which the
+            // layouts are built.
+            unsafe {
+                gpu.device.create_shader_module_passthrough(wgpu::ShaderModuleDescriptorPassthrough {
+                    label: Some("sky (exact)"),
+                    spirv: Some(spirv.into()),
+                    entry_points: entry_points.into(),
+                    ..Default::default()
+                })
+            }
+        })
+    }
+
     fn with_source(
         gpu: &Gpu,
         wgsl: &str,
         source: wgpu::ShaderSource<'_>,
         sub_passes: SubPasses,
+    ) -> Result<SkyShader, RenderError> {
+        Self::with_module(gpu, wgsl, sub_passes, || {
+            gpu.device.create_shader_module(wgpu::ShaderModuleDescriptor { label: Some("sky"), source })
+        })
+    }
+
+    fn with_module(
+        gpu: &Gpu,
+        wgsl: &str,
+        sub_passes: SubPasses,
+        create: impl FnOnce() -> wgpu::ShaderModule,
     ) -> Result<SkyShader, RenderError> {
         let bindings = bindings::discover(wgsl)?;
         // `discover` parsed it already, so this parse succeeds.
@@ -238,7 +293,7 @@ impl SkyShader {
             .unwrap_or(gdsky_naga::wrapper::FAR_PLANE_STANDARD);
         let device = &gpu.device;
         scoped(gpu, || {
-            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor { label: Some("sky"), source });
+            let module = create();
             let groups = bindings.iter().map(|b| b.group + 1).max().unwrap_or(1);
             let group_layouts: Vec<_> = (0..groups)
                 .map(|group| {

@@ -7,6 +7,12 @@
 //! bits, far below the ~1e-12 the f64 comparisons need. The modules go to wgpu as SPIR-V (WGSL
 //! has no f64); the bind group layouts come from the f32 module's WGSL, whose resources are the
 //! same (the widening keeps every binding and the material block's layout).
+//!
+//! The SPIR-V goes to the driver as written (wgpu's passthrough shaders) with every float
+//! operation decorated `NoContraction` (`gdsky_naga::exact_arithmetic`): without it Mesa treats
+//! the arithmetic as real-number algebra and folds the error terms the f64 routines compute
+//! (measured on lavapipe: `x − ((1 + x) − 1)` → 0), and wgpu's usual path re-reads SPIR-V
+//! through naga, which drops the decoration.
 
 use crate::render::{RenderError, SkyShader, SubPasses};
 use crate::{Gpu, Projection, SkyBuiltins};
@@ -71,7 +77,9 @@ impl F64Sky {
         let compile = |output| -> Result<(SkyShader, gdsky_naga::Lowered), F64Error> {
             let lowered = gdsky_naga::lower_f64(front, baked, output).map_err(messages)?;
             let spirv = gdsky_naga::to_spirv(&lowered).map_err(|e| F64Error::Emit(format!("{e:?}")))?;
-            Ok((SkyShader::from_spirv(gpu, &wgsl, &spirv, SubPasses::default())?, lowered))
+            let spirv = gdsky_naga::exact_arithmetic(&spirv);
+            let entry_points: Vec<String> = lowered.module.entry_points.iter().map(|e| e.name.clone()).collect();
+            Ok((SkyShader::from_spirv_exact(gpu, &wgsl, &spirv, &entry_points, SubPasses::default())?, lowered))
         };
         let (nearest, lowered) = compile(gdsky_naga::F64Output::Nearest)?;
         let (residual, _) = compile(gdsky_naga::F64Output::Residual)?;

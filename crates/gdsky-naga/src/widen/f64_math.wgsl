@@ -12,11 +12,30 @@
 //
 // The algorithms follow fdlibm's (Sun's freely distributable libm, which Rust's f64 methods
 // descend from): exp by Cody–Waite reduction by ln 2; log by frexp and the atanh series of
-// (m − 1)/(m + 1) in double-double; sin/cos by a three-piece Cody–Waite reduction by π/2 (good to
-// |x| < 2^20·π/2 ≈ 1.6e6; beyond, the reduction loses bits: there is no Payne–Hanek); atan by a
-// table of atan(i/8).
+// (m − 1)/(m + 1) in double-double; sin/cos by a Cody–Waite reduction by π/2 (three pieces below
+// 1.6e6, seven 24-bit pieces up to 2^53; beyond 2^53 there is no Payne–Hanek); atan by a table
+// of atan(i/8).
 //
 // No `const` declarations at module scope: the grafting copies functions only.
+
+// ---------------------------------------------------------------------------------------------
+// Error-free products
+// ---------------------------------------------------------------------------------------------
+
+// The rounding error e of p = a·b (p + e = a·b exactly), by Dekker's product of Veltkamp halves:
+// + − × only. Not fma(a, b, −p): Vulkan does not promise that f64 fma is fused, and lavapipe's
+// is not (measured: fma(a, b, −a·b) = 0). Exact while a·b neither under- nor overflows and
+// |a|, |b| < 2^996. Like every error term here, it needs the module's arithmetic evaluated as
+// written: gdsky's f64 modules decorate it `NoContraction` (`gdsky_naga::exact_arithmetic`).
+fn gdsky_f64_mul_err(a: f64, b: f64, p: f64) -> f64 {
+    let ca = 134217729.0lf * a;
+    let ah = ca - (ca - a);
+    let al = a - ah;
+    let cb = 134217729.0lf * b;
+    let bh = cb - (cb - b);
+    let bl = b - bh;
+    return (((ah * bh - p) + ah * bl) + al * bh) + al * bl;
+}
 
 // ---------------------------------------------------------------------------------------------
 // exp
@@ -91,7 +110,7 @@ fn gdsky_f64_exp2(x: f64) -> f64 {
     let r = x - k; // exact
     // r·ln2 as a double-double: the product's rounding error by fma, plus r times ln2's tail.
     let t = r * 0.6931471805599453lf;
-    let tl = fma(r, 0.6931471805599453lf, -t) + r * 2.3190468138462996e-17lf;
+    let tl = gdsky_f64_mul_err(r, 0.6931471805599453lf, t) + r * 2.3190468138462996e-17lf;
     return gdsky_f64_scale(gdsky_f64_exp_dd(t, tl), k);
 }
 
@@ -172,11 +191,13 @@ fn gdsky_f64_log_dd(x: f64) -> vec2<f64> {
         e = e - 1.0lf;
     }
     let f = m - 1.0lf; // exact (Sterbenz), in [-0.29, 0.42)
-    // s = f / (2 + f) as a double-double: 2 + f's rounding error, and the quotient's by fma.
+    // s = f / (2 + f) as a double-double: 2 + f's rounding error, and the quotient's (f − s·u is
+    // exact in f − su − e: su is within an ulp of f).
     let u = 2.0lf + f;
     let ul = (2.0lf - u) + f;
     let s = f / u;
-    let sl = (fma(-s, u, f) - s * ul) / u;
+    let su = s * u;
+    let sl = (((f - su) - gdsky_f64_mul_err(s, u, su)) - s * ul) / u;
     // log(m) = 2·atanh(s) = 2s + s³·(2/3 + 2z/5 + …), z = s² ≤ 0.0295: to z^11 (next < 2^-60 of 2s).
     let z = s * s;
     var q = 0.08695652173913043lf;
@@ -228,7 +249,7 @@ fn gdsky_f64_log2(x: f64) -> f64 {
     let l = gdsky_f64_log_dd(x);
     // (hi + lo)·(1/ln2 + tail) as a double-double, then rounded once.
     let h = l.x * 1.4426950408889634lf;
-    let hl = fma(l.x, 1.4426950408889634lf, -h) + (l.x * 2.0355273740931033e-17lf + l.y * 1.4426950408889634lf);
+    let hl = gdsky_f64_mul_err(l.x, 1.4426950408889634lf, h) + (l.x * 2.0355273740931033e-17lf + l.y * 1.4426950408889634lf);
     return h + hl;
 }
 
@@ -288,7 +309,7 @@ fn gdsky_f64_pow(x: f64, y: f64) -> f64 {
     // relative in the result, and y·log x reaches 745.
     let l = gdsky_f64_log_dd(x);
     let p = y * l.x;
-    let pl = fma(y, l.x, -p) + y * l.y;
+    let pl = gdsky_f64_mul_err(y, l.x, p) + y * l.y;
     if (p > 709.8lf) {
         return big * 2.0lf * abs(y); // +inf
     }
@@ -302,9 +323,10 @@ fn gdsky_f64_pow(x: f64, y: f64) -> f64 {
 // sin, cos, tan
 // ---------------------------------------------------------------------------------------------
 
-// x − n·π/2 as a double-double (y0, y1), and n mod 4 in z. π/2 in three 33-bit pieces and a
-// tail: n·piece is exact for |n| < 2^20, and the sums are exact two-sums.
-fn gdsky_f64_rem_pio2(x: f64) -> vec3<f64> {
+// x − n·π/2 as a double-double (y0, y1), and n mod 4 in z, for |x| < 2^20·π/2 ≈ 1.6e6: π/2 in
+// three 33-bit pieces and a tail; n·piece is exact for |n| < 2^20, and the sums are exact
+// two-sums.
+fn gdsky_f64_rem_pio2_small(x: f64) -> vec3<f64> {
     let n = round(x * 0.6366197723675814lf);
     let r1 = x - n * 1.5707963267341256lf;
     let w2 = -(n * 6.077100506303966e-11lf);
@@ -318,6 +340,51 @@ fn gdsky_f64_rem_pio2(x: f64) -> vec3<f64> {
     let tail = (e + e2) - n * 8.4784276603689e-32lf;
     let y0 = s2 + tail;
     let y1 = tail - (y0 - s2);
+    let quadrant = n - 4.0lf * floor(n * 0.25lf);
+    return vec3<f64>(y0, y1, quadrant);
+}
+
+// (s, t) + b with s + b as an exact two-sum and its error gathered in t.
+fn gdsky_f64_dd_add(acc: vec2<f64>, b: f64) -> vec2<f64> {
+    let s = acc.x + b;
+    let bb = s - acc.x;
+    return vec2<f64>(s, acc.y + ((acc.x - (s - bb)) + (b - bb)));
+}
+
+// The same for |x| < 2^53; beyond, NaN rather than a wrong value (every such double is an even
+// integer whose remainder needs the bits of 2/π far below 2^-53, i.e. Payne–Hanek, not done). n is
+// x·2/π rounded from a double-double product; π/2 is seven pieces of 24 bits (168 bits, what
+// cancels against an n of 53 bits leaves 115) and n is split at 2^24, so each n-part × piece is
+// exact; the products are subtracted from x, largest first, into a double-double.
+fn gdsky_f64_rem_pio2(x: f64) -> vec3<f64> {
+    if (abs(x) < 1.6e6lf) {
+        return gdsky_f64_rem_pio2_small(x);
+    }
+    if (!(abs(x) < 9007199254740992.0lf)) {
+        return vec3<f64>(sqrt(-abs(x)), 0.0lf, 0.0lf); // NaN
+    }
+    let p = x * 0.6366197723675814lf;
+    let pe = gdsky_f64_mul_err(x, 0.6366197723675814lf, p) + x * -3.935735335036497e-17lf;
+    let n1 = round(p);
+    let n = n1 + round((p - n1) + pe);
+    let n_hi = 16777216.0lf * floor(n * 5.960464477539063e-08lf);
+    let n_lo = n - n_hi;
+    var acc = vec2<f64>(x, 0.0lf);
+    acc = gdsky_f64_dd_add(acc, -(n_hi * 1.5707963705062866lf));
+    acc = gdsky_f64_dd_add(acc, -(n_hi * -4.371138828673793e-08lf));
+    acc = gdsky_f64_dd_add(acc, -(n_lo * 1.5707963705062866lf));
+    acc = gdsky_f64_dd_add(acc, -(n_hi * -1.7151245100058819e-15lf));
+    acc = gdsky_f64_dd_add(acc, -(n_lo * -4.371138828673793e-08lf));
+    acc = gdsky_f64_dd_add(acc, -(n_hi * 1.056299898220315e-23lf));
+    acc = gdsky_f64_dd_add(acc, -(n_lo * -1.7151245100058819e-15lf));
+    acc = gdsky_f64_dd_add(acc, -(n_hi * 8.478427566216846e-32lf));
+    acc = gdsky_f64_dd_add(acc, -(n_lo * 1.056299898220315e-23lf));
+    acc = gdsky_f64_dd_add(acc, -(n_hi * 9.415205271428978e-40lf));
+    acc = gdsky_f64_dd_add(acc, -(n_lo * 8.478427566216846e-32lf));
+    acc = gdsky_f64_dd_add(acc, -(n_hi * 1.1687495018667348e-47lf));
+    let tail = acc.y - (n_lo * 9.415205271428978e-40lf + n_lo * 1.1687495018667348e-47lf);
+    let y0 = acc.x + tail;
+    let y1 = tail - (y0 - acc.x);
     let quadrant = n - 4.0lf * floor(n * 0.25lf);
     return vec3<f64>(y0, y1, quadrant);
 }

@@ -28,3 +28,22 @@ pub fn gpu() -> skyrun::Gpu {
     eprintln!("adapter: {}", gpu.adapter_info());
     gpu
 }
+
+/// Runs `spirv-val --target-env vulkan1.1` on `words`; panics with its message if it refuses.
+pub fn spirv_val(words: &[u32]) {
+    let path = std::env::temp_dir().join(format!("skyrun-test-{}.spv", std::process::id()));
+    let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
+    std::fs::write(&path, bytes).expect("temporary SPIR-V file");
+    let out = std::process::Command::new("spirv-val")
+        .args(["--target-env", "vulkan1.1"])
+        .arg(&path)
+        .output()
+        .expect("spirv-val runs (Debian package spirv-tools)");
+    let _ = std::fs::remove_file(&path);
+    assert!(
+        out.status.success(),
+        "spirv-val refuses the module: {}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
