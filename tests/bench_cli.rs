@@ -217,3 +217,53 @@ fn a_shader_that_is_not_freeman_compatible_is_benched_against_its_sampling_truth
     let o = gdsky(&["bench", file.to_str().unwrap(), "--truth", "integral", "-o", out.to_str().unwrap()], &dir);
     assert_eq!(o.status.code(), Some(1), "{}", text(&o));
 }
+
+/// `--truth-supersample N` makes the sampling truth each pixel's area average: a shader with a
+/// hard edge inside pixels is then off at the edge by its aliasing, which the pixel-centre truth
+/// cannot see (there the only error is the loop's sampling). The flag is refused for skyref's
+/// truth.
+#[test]
+fn a_supersampled_truth_sees_aliasing_at_a_hard_edge() {
+    let dir = scratch("supersample");
+    let file = dir.join("edge.gdshader");
+    // EYEDIR.x = 0.3 crosses pixels of a 16×8 panorama away from their centres; the loop
+    // converges fast (the knob exists so there is a truth to converge).
+    std::fs::write(
+        &file,
+        "shader_type sky;\nconst int STEPS = 16;\n\
+         void sky() { float a = 0.0;\nfor (int i = 0; i < STEPS; i++) { a += exp(-4.0 * (float(i) + 0.5) / float(STEPS)); }\n\
+         COLOR = vec3(a / float(STEPS)) * (EYEDIR.x > 0.3 ? 1.0 : 0.25); }\n",
+    )
+    .unwrap();
+    let default_max = |supersample: &str| -> f64 {
+        let out = dir.join(format!("out{supersample}"));
+        let args = [
+            "bench",
+            file.to_str().unwrap(),
+            "--size",
+            "16x8",
+            "--runs",
+            "1",
+            "--truth-supersample",
+            supersample,
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        let o = gdsky(&args, &dir);
+        assert!(o.status.success(), "{}", text(&o));
+        let t = text(&o);
+        let line = t.lines().find(|l| l.starts_with("default")).unwrap_or_else(|| panic!("{t}"));
+        let max = line.split("max ").nth(1).and_then(|v| v.split(',').next()).unwrap_or_else(|| panic!("{line}"));
+        max.trim().parse().unwrap_or_else(|_| panic!("{line}"))
+    };
+    let centre = default_max("1");
+    let area = default_max("4");
+    // Centre truth: STEPS=16 against the converged loop only (a smooth, small error). Area
+    // truth: a pixel the edge crosses averages 1 and 0.25, so the centre sample is off by a
+    // large fraction of it.
+    assert!(centre < 0.05, "pixel-centre truth: max {centre}");
+    assert!(area > 0.2, "area truth: max {area} (the edge's aliasing should show)");
+    let freeman = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/freeman_sky.gdshader");
+    let o = gdsky(&["bench", freeman.to_str().unwrap(), "--truth-supersample", "2"], &dir);
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+}

@@ -118,6 +118,12 @@ pub struct BenchArgs {
     /// this [default: 1e-3].
     #[arg(long, value_name = "REL", value_parser = parse_tolerance)]
     converge_tol: Option<f64>,
+    /// For a shader that is not Freeman-compatible: samples per pixel side of the sampling
+    /// truth (1 to 8). Above 1, every image of the convergence is rendered N× wider and higher
+    /// and box-filtered, so the truth is each pixel's area average and the errors include the
+    /// shader's aliasing (hashed stars, hard sun edges) [default: 1, the pixel centre].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=8))]
+    truth_supersample: Option<u32>,
     #[command(flatten)]
     scene: SceneArgs,
     #[command(flatten)]
@@ -472,8 +478,10 @@ fn bench(args: &BenchArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
         }
         return bench_any(args, file, scene_args);
     }
-    if args.converge_tol.is_some() {
-        return Err(usage("--converge-tol sets the sampling truth of shaders that are not Freeman-compatible"));
+    if args.converge_tol.is_some() || args.truth_supersample.is_some() {
+        return Err(usage(
+            "--converge-tol and --truth-supersample set the sampling truth of shaders that are not Freeman-compatible",
+        ));
     }
     let truth_mode = truth_from_args(args.truth, args.truth_samples).map_err(usage)?;
     let (views, width, height) = scene_args.views().map_err(usage)?;
@@ -831,7 +839,12 @@ fn bench_any(args: &BenchArgs, file: &Path, scene_args: &SceneArgs) -> Result<()
     bar.enable_steady_tick(Duration::from_millis(200));
     let started = std::time::Instant::now();
     let setting = |values: &[i32]| -> any::Setting { names.iter().cloned().zip(values.iter().copied()).collect() };
-    let limits = any::Limits { tolerance, max_value: MAX_ANY_KNOB, max_doublings: MAX_DOUBLINGS };
+    let limits = any::Limits {
+        tolerance,
+        max_value: MAX_ANY_KNOB,
+        max_doublings: MAX_DOUBLINGS,
+        supersample: args.truth_supersample.unwrap_or(1),
+    };
     let truth =
         any::converge(&gpu, &sky, &setting(&defaults), &names, &shots, limits, |m| bar.set_message(m.to_string()))
             .map_err(|e| {

@@ -57,6 +57,12 @@ pub struct TuneArgs {
     /// The sampling truth's tolerance (shaders that are not Freeman-compatible) [default: 1e-3].
     #[arg(long, value_name = "REL", value_parser = parse_tolerance)]
     converge_tol: Option<f64>,
+    /// For a shader that is not Freeman-compatible: samples per pixel side of the sampling
+    /// truth (1 to 8). Above 1, every image of the convergence is rendered N× wider and higher
+    /// and box-filtered, so the truth is each pixel's area average and the errors include the
+    /// shader's aliasing (hashed stars, hard sun edges) [default: 1, the pixel centre].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=8))]
+    truth_supersample: Option<u32>,
     /// Folder for the specialized shader and tune.csv (created if missing; checked first).
     #[arg(short = 'o', long = "out-dir", value_name = "DIR", default_value = "out/tune")]
     out_dir: PathBuf,
@@ -124,6 +130,11 @@ fn tune(args: &TuneArgs) -> Result<(), ExitCode> {
     let sky = any::Sky::new(front, Vec::new()).map_err(usage)?;
     let shader = sky.front.shader.as_ref().ok_or(ExitCode::from(1))?;
     let freeman = gdsky::measure::freeman::compatible(shader);
+    if freeman && args.truth_supersample.is_some() {
+        return Err(usage(
+            "--truth-supersample sets the sampling truth; a Freeman-compatible shader is measured against skyref's integrals",
+        ));
+    }
     let knobs = any_knobs(&sky, &args.knobs).map_err(usage)?;
     if knobs.is_empty() {
         return Err(usage(format!(
@@ -151,7 +162,12 @@ fn tune(args: &TuneArgs) -> Result<(), ExitCode> {
         let images = freeman_truth(shader, &shots).map_err(usage)?;
         (images, "skyref::truth, the Freeman model's integrals (~1e-7)".to_string(), None)
     } else {
-        let limits = any::Limits { tolerance, max_value: MAX_ANY_KNOB, max_doublings: MAX_DOUBLINGS };
+        let limits = any::Limits {
+            tolerance,
+            max_value: MAX_ANY_KNOB,
+            max_doublings: MAX_DOUBLINGS,
+            supersample: args.truth_supersample.unwrap_or(1),
+        };
         let c =
             any::converge(&gpu, &sky, &setting(&defaults), &names, &shots, limits, |m| bar.set_message(m.to_string()))
                 .map_err(usage)?;

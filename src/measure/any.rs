@@ -271,12 +271,33 @@ pub fn render64_all(
     shots.iter().map(|s| c.render(gpu, s)).collect()
 }
 
-/// The f64 images of `shots` at `setting` and the mean error of the f32 images against them.
-fn render_both(gpu: &Gpu, sky: &Sky, setting: &[(String, i32)], shots: &[Shot]) -> Result<(Images64, f64), String> {
+/// The f64 images of `shots` at `setting` and the mean error of the f32 images against them,
+/// each rendered at `supersample`² samples per pixel and box-filtered ([`Limits::supersample`]).
+fn render_both(
+    gpu: &Gpu,
+    sky: &Sky,
+    setting: &[(String, i32)],
+    shots: &[Shot],
+    supersample: u32,
+) -> Result<(Images64, f64), String> {
     let v = sky.variant(setting)?;
     let (c64, c32) = (v.compile_f64(gpu)?, v.compile(gpu)?);
-    let images: Vec<Vec<[f64; 4]>> = shots.iter().map(|s| c64.render(gpu, s)).collect::<Result<_, _>>()?;
-    let f32s: Vec<Vec<[f32; 4]>> = shots.iter().map(|s| c32.render(gpu, s).map(|r| r.0)).collect::<Result<_, _>>()?;
+    let k = supersample.clamp(1, MAX_SUPERSAMPLE);
+    let mut images = Vec::with_capacity(shots.len());
+    let mut f32s = Vec::with_capacity(shots.len());
+    for shot in shots {
+        let fine = shot.supersampled(k);
+        let (f64_image, f32_image) = (c64.render(gpu, &fine)?, c32.render(gpu, &fine)?.0);
+        if k == 1 {
+            images.push(f64_image);
+            f32s.push(f32_image);
+        } else {
+            images.push(box_filter(&f64_image, shot.width, shot.height, k));
+            // The f32 image's block means, rounded back to f32 for the guard's statistics.
+            let filtered = box_filter(&f32_image, shot.width, shot.height, k);
+            f32s.push(filtered.iter().map(|p| p.map(|c| c as f32)).collect());
+        }
+    }
     let error = pooled(&f32s, &images).mean;
     Ok((images, error))
 }
@@ -349,6 +370,47 @@ pub struct Limits {
     /// after 64× is not a sampling knob (a layer count, a pattern's frequency), and raising it
     /// further only costs time.
     pub max_doublings: u32,
+    /// Samples per pixel side (1 to [`MAX_SUPERSAMPLE`]): every image of the convergence, f32
+    /// and f64, is rendered `supersample` times wider and higher and box-filtered down, so the
+    /// truth is the pixel's area average, not its centre's value. An f32 render at one sample
+    /// per pixel then differs from it by its sampling (aliasing) error too: the hash and the
+    /// sun disk's edge count. 1: one sample at each pixel's centre.
+    pub supersample: u32,
+}
+
+/// The largest [`Limits::supersample`]: 8×8 samples per pixel (64× the pixels to render).
+pub const MAX_SUPERSAMPLE: u32 = 8;
+
+impl Shot {
+    /// The same shot with `k` times the pixels on each side (what [`box_filter`] brings back).
+    pub fn supersampled(&self, k: u32) -> Shot {
+        Shot { width: self.width * k, height: self.height * k, ..self.clone() }
+    }
+}
+
+/// The mean of each `k`×`k` block of a `width·k` × `height·k` image (row 0 at the top): a
+/// `width` × `height` image of pixel-area averages. Every block of a panorama or camera view
+/// is the pixel's solid angle sampled on a regular grid (sub-pixel centres), so the mean is
+/// the box-filtered radiance.
+pub fn box_filter<T: Copy + Into<f64>>(fine: &[[T; 4]], width: u32, height: u32, k: u32) -> Vec<[f64; 4]> {
+    let (w, k) = (width as usize, k as usize);
+    let fine_w = w * k;
+    let scale = 1.0 / (k * k) as f64;
+    (0..height as usize * w)
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            let mut sum = [0.0f64; 4];
+            for dy in 0..k {
+                for dx in 0..k {
+                    let p = fine[(y * k + dy) * fine_w + x * k + dx];
+                    for c in 0..4 {
+                        sum[c] += p[c].into();
+                    }
+                }
+            }
+            sum.map(|v| v * scale)
+        })
+        .collect()
 }
 
 /// Raises each of `names` (doubling, one knob at a time, from `start`) until doubling it
@@ -368,7 +430,7 @@ pub fn converge(
     mut progress: impl FnMut(&str),
 ) -> Result<Converged, String> {
     let mut setting = start.clone();
-    let (mut images, baseline) = render_both(gpu, sky, &setting, shots)?;
+    let (mut images, baseline) = render_both(gpu, sky, &setting, shots, limits.supersample)?;
     // Non-finite channels of the start: a step that adds any (an overflowing layer scale, a
     // division by a vanishing step) is rejected, since the statistics leave NaN out and a
     // truth full of them would look converged.
@@ -388,7 +450,7 @@ pub fn converge(
             progress(&format!("converging: {name} {from} → {to}"));
             let mut next = setting.clone();
             next[at].1 = to;
-            let (next_images, f32_vs_f64) = render_both(gpu, sky, &next, shots)?;
+            let (next_images, f32_vs_f64) = render_both(gpu, sky, &next, shots, limits.supersample)?;
             let change = pooled_f64(&images, &next_images);
             let rejected = f32_vs_f64 > bound || nonfinite(&next_images) > start_nonfinite;
             steps.push(Step { knob: name.clone(), from, to, change, f32_vs_f64, rejected });
@@ -411,7 +473,7 @@ pub fn converge(
             .collect();
         if next != setting {
             progress("converging: all knobs doubled (check)");
-            let (next_images, f32_vs_f64) = render_both(gpu, sky, &next, shots)?;
+            let (next_images, f32_vs_f64) = render_both(gpu, sky, &next, shots, limits.supersample)?;
             let change = pooled_f64(&images, &next_images);
             let rejected = f32_vs_f64 > bound || nonfinite(&next_images) > start_nonfinite;
             converged &= change.mean < limits.tolerance && !rejected;
