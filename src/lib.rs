@@ -20,6 +20,7 @@
 
 pub mod build;
 pub mod measure;
+pub mod noise;
 pub mod scene;
 
 pub use gdshader as frontend;
