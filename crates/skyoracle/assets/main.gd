@@ -88,6 +88,10 @@ func _run(text: String) -> void:
 		reply = await _render(job)
 	elif job.get("op") == "compile":
 		reply = await _compile(job)
+	elif job.get("op") == "noise":
+		reply = await _noise(job)
+	elif job.get("op") == "defaults":
+		reply = _defaults(job)
 	else:
 		reply = {"error": "unknown op %s" % str(job.get("op"))}
 	if typeof(job) == TYPE_DICTIONARY:
@@ -147,6 +151,9 @@ func _uniform_value(uniform: Dictionary):
 			for x in v:
 				ints.append(int(x))
 			return ints
+		"noise_texture_2d":
+			# Built (and awaited) by _render: generation takes frames.
+			return null
 		"texture_rgbaf":
 			# [width, height, base64 of little-endian f32 RGBA, row 0 first]; the crate checked the
 			# sizes, and create_from_data refuses (null) a byte count that does not match them.
@@ -172,6 +179,11 @@ func _render(job: Dictionary) -> Dictionary:
 		if not declared.has(str(uniform.get("name"))):
 			return {"error": "the shader declares no uniform named %s" % uniform.get("name")}
 		var value = _uniform_value(uniform)
+		if str(uniform.get("type")) == "noise_texture_2d":
+			var made = await _generated_noise(uniform.get("value", {}), false, int(job.get("timeout_ms", 60000)))
+			if typeof(made) == TYPE_STRING:
+				return {"error": "uniform %s: %s" % [uniform.get("name"), made]}
+			value = made
 		if value == null:
 			return {"error": "uniform %s: unsupported type %s, or texture data that does not match its size" % [uniform.get("name"), uniform.get("type")]}
 		material.set_shader_parameter(str(uniform.get("name")), value)
@@ -219,3 +231,158 @@ func _render(job: Dictionary) -> Dictionary:
 		frames.append(Marshalls.raw_to_base64(image.get_data()))
 		frame_ms.append((Time.get_ticks_usec() - t0) / 1000.0)
 	return {"width": width, "height": height, "frames": frames, "frame_ms": frame_ms}
+
+
+## Sets properties of `object` from a JSON map in the order given, converting JSON numbers and
+## arrays to each property's type. Returns an error message, or "" when all were set.
+func _set_properties(object: Object, properties: Dictionary, order: Array) -> String:
+	var types := {}
+	for property in object.get_property_list():
+		types[property.get("name")] = int(property.get("type"))
+	var names: Array = order.filter(func(n): return properties.has(n))
+	for name in properties:
+		if not names.has(name):
+			names.append(name)
+	for name in names:
+		if not types.has(name):
+			return "%s has no property named %s" % [object.get_class(), name]
+		var v = properties[name]
+		match types[name]:
+			TYPE_INT:
+				v = int(v)
+			TYPE_FLOAT:
+				v = float(v)
+			TYPE_BOOL:
+				v = bool(v)
+			TYPE_VECTOR3:
+				v = Vector3(v[0], v[1], v[2])
+			TYPE_PACKED_FLOAT32_ARRAY:
+				v = PackedFloat32Array(v)
+			TYPE_PACKED_COLOR_ARRAY:
+				var colors := PackedColorArray()
+				for c in v:
+					colors.append(Color(c[0], c[1], c[2], c[3]))
+				v = colors
+			_:
+				return "%s.%s has a type the oracle does not set" % [object.get_class(), name]
+		object.set(name, v)
+		# set() ignores a value it cannot convert: check that it took.
+		if typeof(object.get(name)) != types[name]:
+			return "%s.%s did not take the value %s" % [object.get_class(), name, str(properties[name])]
+	return ""
+
+
+## A NoiseTexture2D (or 3D) built from {"texture": {...}, "noise": {...} or null,
+## "color_ramp": {...} or null}, after Godot has generated it; or an error message.
+func _generated_noise(spec: Dictionary, volume: bool, limit_ms: int):
+	var texture = NoiseTexture3D.new() if volume else NoiseTexture2D.new()
+	var error := _set_properties(texture, spec.get("texture", {}), [])
+	if error != "":
+		return error
+	var ramp = spec.get("color_ramp")
+	if typeof(ramp) == TYPE_DICTIONARY:
+		var gradient := Gradient.new()
+		# Offsets first: set_colors and set_offsets each resize the point list.
+		error = _set_properties(gradient, ramp, ["offsets", "colors"])
+		if error != "":
+			return error
+		texture.color_ramp = gradient
+	var noise = spec.get("noise")
+	if typeof(noise) != TYPE_DICTIONARY:
+		return "no noise: Godot generates nothing without one"
+	var fnl := FastNoiseLite.new()
+	error = _set_properties(fnl, noise, [])
+	if error != "":
+		return error
+	texture.noise = fnl
+	# The first generation runs in a deferred call at the end of this frame (synchronously, not on
+	# a thread: NoiseTexture2D::_update_texture's first_time), then emits `changed`.
+	var done := [false]
+	texture.changed.connect(func(): done[0] = true)
+	var started := Time.get_ticks_msec()
+	while not done[0]:
+		if Time.get_ticks_msec() - started > limit_ms:
+			return "Godot did not generate the noise texture within %d ms" % limit_ms
+		await get_tree().process_frame
+	return texture
+
+
+## NoiseTexture3D::_modulate_with_gradient: each texel's luminance through the gradient.
+func _modulate(image: Image, gradient: Gradient) -> Image:
+	var out := Image.create_empty(image.get_width(), image.get_height(), false, Image.FORMAT_RGBA8)
+	for y in image.get_height():
+		for x in image.get_width():
+			out.set_pixel(x, y, gradient.sample(image.get_pixel(x, y).get_luminance()))
+	return out
+
+
+func _format_name(format: int) -> String:
+	match format:
+		Image.FORMAT_L8:
+			return "L8"
+		Image.FORMAT_RGBA8:
+			return "RGBA8"
+		Image.FORMAT_RGB8:
+			return "RGB8"
+	return "format %d" % format
+
+
+## Level 0 of each image, base64, with the format Godot generated and whether it had mipmaps.
+func _noise(job: Dictionary) -> Dictionary:
+	var volume := bool(job.get("volume", false))
+	var made = await _generated_noise(job.get("spec", {}), volume, int(job.get("timeout_ms", 60000)))
+	if typeof(made) == TYPE_STRING:
+		return {"error": made}
+	var images := []
+	if volume:
+		# Not made.get_data(): the Compatibility renderer's texture_3d_get on WebGL2 hands back
+		# wrong slices (measured: slices 0, 0, 1, 3, 3, 4 of a depth-6 texture). These are the
+		# calls NoiseTexture3D::_generate_texture makes, with its colour ramp step.
+		var t: NoiseTexture3D = made
+		if t.seamless:
+			images = t.noise.get_seamless_image_3d(t.width, t.height, t.depth, t.invert, t.seamless_blend_skirt, t.normalize)
+		else:
+			images = t.noise.get_image_3d(t.width, t.height, t.depth, t.invert, t.normalize)
+		if t.color_ramp != null:
+			images = images.map(func(image): return _modulate(image, t.color_ramp))
+	else:
+		images = [made.get_image()]
+	if images.is_empty() or images[0] == null:
+		return {"error": "Godot generated no image"}
+	var layers := []
+	var mipmaps := false
+	for image in images:
+		var level0: Image = image
+		if image.has_mipmaps():
+			mipmaps = true
+			level0 = image.duplicate()
+			level0.clear_mipmaps()
+		layers.append(Marshalls.raw_to_base64(level0.get_data()))
+	var first: Image = images[0]
+	return {"width": first.get_width(), "height": first.get_height(), "format": _format_name(first.get_format()), "mipmaps": mipmaps, "layers": layers}
+
+
+## The values a new instance of a class has for the named properties (Vector3 and packed arrays
+## as JSON arrays, objects as their class name).
+func _defaults(job: Dictionary) -> Dictionary:
+	var name := str(job.get("class", ""))
+	if not ClassDB.can_instantiate(name):
+		return {"error": "cannot instantiate %s" % name}
+	var object = ClassDB.instantiate(name)
+	var values := {}
+	for property in job.get("properties", []):
+		var v = object.get(property)
+		match typeof(v):
+			TYPE_VECTOR3:
+				v = [v.x, v.y, v.z]
+			TYPE_PACKED_FLOAT32_ARRAY:
+				v = Array(v)
+			TYPE_PACKED_COLOR_ARRAY:
+				var colors := []
+				for c in v:
+					colors.append([c.r, c.g, c.b, c.a])
+				v = colors
+			TYPE_OBJECT:
+				v = v.get_class() if v != null else null
+		values[property] = v
+	return {"values": values}

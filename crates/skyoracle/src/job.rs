@@ -95,6 +95,9 @@ pub enum UniformValue {
         /// `width × height` texels, row-major.
         texels: Vec<[f32; 4]>,
     },
+    /// A `sampler2D` bound to a `NoiseTexture2D` that Godot itself generates from these
+    /// properties (see [`crate::NoiseTextureSpec`]); the render waits until it has.
+    NoiseTexture2D(crate::NoiseTextureSpec),
 }
 
 /// The largest side of a [`UniformValue::TextureRgbaF32`]: a 4096² RGBA f32 texture is 256 MiB,
@@ -122,6 +125,7 @@ impl UniformValue {
                 let data = base64::engine::general_purpose::STANDARD.encode(bytes);
                 ("texture_rgbaf", json!([width, height, data]))
             }
+            Self::NoiseTexture2D(spec) => ("noise_texture_2d", spec.to_json()),
         }
     }
 
@@ -237,11 +241,20 @@ impl Job {
         }
     }
 
-    /// The time allowed for this job.
+    /// The time allowed for this job (plus the time allowed for generating each noise texture
+    /// it binds).
     pub fn time_allowed(&self) -> Duration {
         self.timeout.unwrap_or_else(|| {
             let work = f64::from(self.width) * f64::from(self.height) * self.brackets.energies.len() as f64;
-            Duration::from_secs(60) + Duration::from_secs_f64(work * 50e-6)
+            let noise: Duration = self
+                .uniforms
+                .iter()
+                .filter_map(|(_, v)| match v {
+                    UniformValue::NoiseTexture2D(spec) => Some(spec.time_allowed(false)),
+                    _ => None,
+                })
+                .sum();
+            Duration::from_secs(60) + Duration::from_secs_f64(work * 50e-6) + noise
         })
     }
 
@@ -344,6 +357,23 @@ mod tests {
         refused(texture(1, MAX_TEXTURE_SIDE + 1, vec![[0.0; 4]; 4097]), "outside 1…4096");
         refused(texture(1, 1, vec![[0.0, f32::NAN, 0.0, 0.0]]), "non-finite");
         refused(texture(1, 1, vec![[f32::INFINITY, 0.0, 0.0, 0.0]]), "non-finite");
+    }
+
+    #[test]
+    fn noise_texture_travels_as_its_properties_and_extends_the_time_allowed() {
+        let mut spec = crate::NoiseTextureSpec::default();
+        spec.texture.insert("width".into(), json!(1000));
+        spec.texture.insert("height".into(), json!(1000));
+        spec.noise = Some(serde_json::Map::new());
+        let plain = Job::new("shader_type sky;", 4, 2);
+        let job = Job { uniforms: vec![("n".into(), UniformValue::NoiseTexture2D(spec))], ..plain.clone() };
+        let uniform = &job.to_json(1)["uniforms"][0];
+        assert_eq!(uniform["type"], "noise_texture_2d");
+        assert_eq!(uniform["value"]["texture"]["width"], 1000);
+        assert_eq!(uniform["value"]["color_ramp"], Value::Null);
+        // 60 s plus 20 µs per texel for the generation.
+        assert_eq!(job.time_allowed() - plain.time_allowed(), Duration::from_secs(80));
+        assert_eq!(job.validate(), Ok(()));
     }
 
     #[test]

@@ -154,6 +154,28 @@
 //! adds about 0.1 s to a job (1.06 s at 256×64 × 27 frames, Godot 0.34 s of it, against 0.98 s
 //! with a 1×1 texture whose job also compiled the shader).
 //!
+//! ## Noise textures
+//!
+//! [`Oracle::noise_image`] has Godot build a `NoiseTexture2D` with a `FastNoiseLite` (and a
+//! `Gradient` colour ramp) from JSON maps of their properties ([`NoiseTextureSpec`], by Godot's
+//! names; `main.gd` converts each value to the property's type and refuses an unknown name or a
+//! value that does not take), waits for its `changed` signal (the first generation runs
+//! synchronously in a deferred call at the end of the frame) and returns level 0 of
+//! `get_image()` in Godot's own format, L8 or RGBA8, as base64 ([`GodotNoiseImage`]; whether
+//! mipmaps were generated is reported, the levels are dropped). [`Oracle::noise_volume`] does
+//! the same for a `NoiseTexture3D`, but reads its slices from the calls its generation makes
+//! (`get_image_3d` / `get_seamless_image_3d`, then the colour ramp through `Gradient.sample`
+//! of each texel's luminance): `NoiseTexture3D.get_data()` goes through the Compatibility
+//! renderer's `texture_3d_get`, which on WebGL2 hands back wrong slices (measured: slices 0, 0,
+//! 1, 3, 3, 4 of a depth-6 texture). [`Oracle::defaults`] reads the properties of a new
+//! instance of any class, to check defaults against Godot's own.
+//!
+//! [`UniformValue::NoiseTexture2D`] binds such a texture to a `sampler2D` in a render job;
+//! `main.gd` builds it and waits for its generation before drawing. Measured
+//! (`tests/noise_oracle.rs` in the root crate): a sky shader reading it with `texelFetch` sees
+//! (v, v, v) for an L8 code v, and gdsky's `gdsky::noise` generates the same bytes as Godot in
+//! every configuration tried (docs/noise.md). A 64×64 texture takes about 0.1 s.
+//!
 //! ## Compile checks
 //!
 //! [`Oracle::compile`] sets the code on a fresh Shader, draws two frames (so the GL driver
@@ -169,11 +191,12 @@
 //!   differ (LIGHT0_COLOR conversion, exact SKY_COORDS in 4.3–4.5, the radiance map); this oracle
 //!   does not see them. Only the background pass: no half/quarter-resolution or cubemap passes,
 //!   no radiance map, no fog.
-//! * Textures: 2D RGBA 32-bit float ones only, one level, no mipmaps; read exactly with
-//!   `texelFetch` (above). Filtered sampling (`texture()`) of them was not measured (WebGL2
-//!   filters 32-bit floats only with `OES_texture_float_linear`); 8-bit, sRGB (`source_color`),
-//!   3D, cube and array textures cannot be given, and a sampler uniform not given keeps Godot's
-//!   default for its hint.
+//! * Textures: 2D RGBA 32-bit float ones (and Godot's own noise textures, above) only, one
+//!   level, no mipmaps; read exactly with `texelFetch` (above). Filtered sampling (`texture()`)
+//!   of them was not measured (WebGL2 filters 32-bit floats only with
+//!   `OES_texture_float_linear`); other 8-bit, sRGB (`source_color`), 3D, cube and array
+//!   textures cannot be given, and a sampler uniform not given keeps Godot's default for its
+//!   hint.
 //! * The GPU is SwiftShader: its transcendental functions are approximations of their own.
 //! * Alpha is not recovered (the background pass forces it; [`OracleImage::pixels`] has alpha 1).
 //! * Negative values are not recoverable, and NaN looks like saturation (above).
@@ -204,6 +227,7 @@
 mod compile;
 mod install;
 mod job;
+mod noise;
 mod pck;
 mod process;
 pub mod recover;
@@ -218,6 +242,7 @@ use serde_json::{Value, json};
 pub use compile::{CompileOutcome, ShaderError};
 pub use install::{INSTALL_COMMAND, Installation, Missing, MissingPart};
 pub use job::{Brackets, Camera, Job, MAX_SIDE, MAX_TEXTURE_SIDE, MIN_SIDE, Sun, UniformValue};
+pub use noise::{GodotNoiseImage, NoiseTextureSpec};
 pub use pck::write_pck;
 pub use recover::Transfer;
 
