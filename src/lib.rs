@@ -19,6 +19,7 @@
 //! ```
 
 pub mod build;
+pub mod godot;
 pub mod measure;
 pub mod noise;
 pub mod scene;

@@ -369,6 +369,8 @@ pub struct SceneFile {
     pub sky_resolution: Option<SkyResolution>,
     /// The `[animate]` table.
     pub animate: Option<Animation>,
+    /// Textures generated for sampler uniforms (a Godot material's `NoiseTexture2D`s).
+    pub generated_textures: Vec<crate::godot::GeneratedTexture>,
     db: SourceDb,
     file: FileId,
 }
@@ -790,9 +792,46 @@ impl SceneFile {
             occluder: raw.occluder.as_ref().map(resolve),
             sky_resolution: raw.sky_resolution,
             animate,
+            generated_textures: Vec::new(),
             db,
             file,
         })
+    }
+
+    /// The scene of a Godot material (`gdsky render sky.tres`): its shader, its values and its
+    /// textures, located in the material's file; nothing else set (the flags' defaults apply).
+    /// `shader` is the `.gdshader`, or the material file itself when the shader is embedded.
+    pub fn from_material(
+        material: crate::godot::SkyMaterial,
+        shader: PathBuf,
+        settings: crate::godot::MaterialSettings,
+    ) -> SceneFile {
+        SceneFile {
+            path: material.path,
+            shader: Some(shader),
+            projection: None,
+            size: None,
+            time: None,
+            sun_elevation: None,
+            sun_azimuth: None,
+            sun_enabled: None,
+            sun_energy: None,
+            sun_color: None,
+            lights: Vec::new(),
+            position: None,
+            fov: None,
+            yaw: None,
+            pitch: None,
+            uniforms: settings.uniforms,
+            overrides: Vec::new(),
+            textures: settings.textures,
+            occluder: None,
+            sky_resolution: None,
+            animate: None,
+            generated_textures: settings.generated,
+            db: material.db,
+            file: material.file,
+        }
     }
 
     /// Checks the scene's uniforms (values and keyframes) against `shader`: each must be a
@@ -890,7 +929,9 @@ impl SceneFile {
     /// A located error at the path of the texture `name` in `[textures]` (the whole file when
     /// the scene does not give it), rendered.
     pub fn texture_error(&self, name: &str, message: &str) -> String {
-        let span = self.textures.iter().find(|t| t.name == name).map(|t| t.span.clone()).unwrap_or(0..0);
+        let given = self.textures.iter().find(|t| t.name == name).map(|t| t.span.clone());
+        let generated = || self.generated_textures.iter().find(|t| t.name == name).map(|t| t.span.clone());
+        let span = given.or_else(generated).unwrap_or(0..0);
         let d = Diagnostic::error(SCENE_VALUE, message.to_string()).with_primary(self.file, span, message.to_string());
         render_human(&self.db, &[d], false)
     }
@@ -952,10 +993,9 @@ pub fn is_scene_path(path: &Path) -> bool {
     path.extension().is_some_and(|e| e.eq_ignore_ascii_case("toml"))
 }
 
-/// Whether `path` names a Godot resource or scene (`.tres`, `.tscn`), which are not supported
-/// yet.
+/// Whether `path` names a Godot resource or scene (`.tres`, `.tscn`): a material to render.
 pub fn is_godot_resource(path: &Path) -> bool {
-    path.extension().is_some_and(|e| e.eq_ignore_ascii_case("tres") || e.eq_ignore_ascii_case("tscn"))
+    crate::godot::is_godot_path(path)
 }
 
 #[cfg(test)]
