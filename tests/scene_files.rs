@@ -89,13 +89,13 @@ fn a_wrong_type_or_syntax_is_located() {
 }
 
 #[test]
-fn godot_resources_are_not_supported_yet() {
+fn godot_resources_without_a_material_are_refused_located() {
     let dir = scratch("scene_files", "tres");
     for name in ["sky.tres", "world.tscn"] {
         let file = write(&dir, name, "[gd_resource]\n");
         let out = gdsky(&["render", &file, "-o", &dir.join("o.exr").display().to_string()]);
         assert_eq!(out.status.code(), Some(1), "{}", text(&out));
-        assert!(text(&out).contains("not supported yet"), "{}", text(&out));
+        assert!(text(&out).contains("error[E803]") && text(&out).contains(&format!("{name}:1:1")), "{}", text(&out));
     }
 }
 

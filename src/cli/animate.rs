@@ -56,8 +56,10 @@ use std::time::{Duration, Instant};
 
 #[derive(Args)]
 pub struct AnimateArgs {
-    /// The scene file; its `[animate]` table gives the frames (without one, a single frame).
-    #[arg(value_name = "SCENE.toml")]
+    /// The scene file; its `[animate]` table gives the frames (without one, a single frame). A
+    /// Godot material or scene (`MATERIAL.tres`, `SCENE.tscn`) gives its shader, values and
+    /// textures, and no `[animate]`: a single frame.
+    #[arg(value_name = "SCENE.toml|MATERIAL.tres|SCENE.tscn")]
     scene_file: PathBuf,
     /// Folder for frame_NNNN.exr, frame_NNNN.png and animate.csv (created if missing; checked
     /// before any work).
@@ -173,8 +175,11 @@ fn reuse_key(frame: &Frame, used: &dyn Fn(&str) -> bool, camera: bool) -> Vec<u8
 }
 
 fn animate(args: &AnimateArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
-    if !gdsky::scene::is_scene_path(&args.scene_file) {
-        return Err(usage(format!("{}: `animate` takes a scene file (.toml)", args.scene_file.display())));
+    if !gdsky::scene::is_scene_path(&args.scene_file) && !gdsky::scene::is_godot_resource(&args.scene_file) {
+        return Err(usage(format!(
+            "{}: `animate` takes a scene file (.toml) or a Godot material or scene (.tres, .tscn)",
+            args.scene_file.display()
+        )));
     }
     let input = open_input(Some(&args.scene_file))?;
     let file: &SceneFile = input.scene.as_ref().ok_or(ExitCode::from(1))?;

@@ -71,8 +71,9 @@ pub struct BenchArgs {
     /// The sky shaders to benchmark on one chart (Freeman-compatible: the Freeman sky's
     /// uniforms), the first of them the one the others are compared with; or, first, a scene file
     /// (`SCENE.toml`: its shader, uniforms, sun, camera, projection, size and time; the flags given
-    /// override it), then more shaders. Without any, the bundled Freeman sky.
-    #[arg(value_name = "FILE|SCENE.toml")]
+    /// override it) or a Godot material or scene (`MATERIAL.tres`, `SCENE.tscn`: its shader and
+    /// values), then more shaders. Without any, the bundled Freeman sky.
+    #[arg(value_name = "FILE|SCENE.toml|MATERIAL.tres|SCENE.tscn")]
     files: Vec<PathBuf>,
     /// Bake every uniform the scene file fixes (and every `--set`) into the shader as
     /// constants, except the swept knobs; with no scene file, every uniform but the knobs at its
@@ -443,9 +444,9 @@ fn bench(args: &BenchArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
     let input = open_input(args.files.first().map(PathBuf::as_path))?;
     let mut files = vec![input.shader.clone()];
     for file in args.files.iter().skip(1) {
-        if gdsky::scene::is_scene_path(file) {
+        if gdsky::scene::is_scene_path(file) || gdsky::scene::is_godot_resource(file) {
             return Err(usage(format!(
-                "{}: only the first FILE can be a scene file; the others are shaders",
+                "{}: only the first FILE can be a scene file or a Godot material; the others are shaders",
                 file.display()
             )));
         }
@@ -758,7 +759,7 @@ fn bench(args: &BenchArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
 /// Whether FILE is Freeman-compatible (skyref is its truth). A shader that does not read or
 /// check counts as compatible here, so the Freeman path reports its diagnostics as before.
 fn is_freeman_compatible(file: &Path) -> Result<bool, ExitCode> {
-    Ok(match gdsky::check_file(file) {
+    Ok(match gdsky::godot::check_file(file) {
         Ok(front) => front.shader.as_ref().is_none_or(gdsky::measure::freeman::compatible),
         Err(_) => true,
     })
@@ -819,7 +820,8 @@ pub fn convergence_table(c: &any::Converged) -> String {
 fn bench_any(args: &BenchArgs, file: &Path, scene_args: &SceneArgs) -> Result<(), ExitCode> {
     let (views, width, height) = scene_args.views().map_err(usage)?;
     super::check_output_dir(&args.out_dir, true, &["bench.csv", "bench.png"])?;
-    let front = gdsky::check_file(file).map_err(|e| environment(format!("cannot read {}: {e}", file.display())))?;
+    let front =
+        gdsky::godot::check_file(file).map_err(|e| environment(format!("cannot read {}: {e}", file.display())))?;
     let sky = any::Sky::new(front, scene_args.overrides().map_err(usage)?).map_err(usage)?;
     let knobs = any_knobs(&sky, &args.knobs).map_err(usage)?;
     let names: Vec<String> = knobs.iter().map(|k| k.name.clone()).collect();

@@ -64,7 +64,7 @@ pub fn run(args: &ConvertArgs) -> ExitCode {
         return code;
     }
     let front = match &input.shader {
-        Some(path) => match gdsky::check_file(path) {
+        Some(path) => match gdsky::godot::check_file(path) {
             Ok(f) => f,
             Err(err) => {
                 eprintln!("error: cannot read {}: {err}", path.display());

@@ -13,9 +13,12 @@ use std::time::Instant;
 
 #[derive(Args)]
 pub struct RenderArgs {
-    /// The sky shader (`.gdshader`) or a scene file (`SCENE.toml`: shader, uniforms, lights,
-    /// camera, projection, size, time; the flags given override it) to render; without one, the
-    /// bundled Freeman sky. Godot materials and scenes (`.tres`, `.tscn`) are not supported yet.
+    /// The sky shader (`.gdshader`), a scene file (`SCENE.toml`: shader, uniforms, lights,
+    /// camera, projection, size, time; the flags given override it), or a Godot material
+    /// (`MATERIAL.tres`: a ShaderMaterial, or a Sky or Environment leading to one) or scene
+    /// (`SCENE.tscn`: its WorldEnvironment's sky), whose shader, `shader_parameter/*` values and
+    /// textures (PNG, OpenEXR, NoiseTexture2D) are used, `--set` and `--texture` overriding them
+    /// (docs/godot-materials.md); without one, the bundled Freeman sky.
     #[arg(value_name = "MATERIAL.tres | SCENE.tscn | SCENE.toml | FILE")]
     file: Option<PathBuf>,
     /// Bake every uniform the scene file fixes (and every `--set`) into the shader as

@@ -123,7 +123,13 @@ impl SceneArgs {
             wanted.retain(|(n, _, _)| n != name.trim());
             wanted.push((name.trim().to_string(), PathBuf::from(path), false));
         }
-        if wanted.is_empty() {
+        // A Godot material's generated textures, unless a file is given for the same name.
+        let generated: Vec<&gdsky::godot::GeneratedTexture> = scene
+            .iter()
+            .flat_map(|s| &s.generated_textures)
+            .filter(|g| !wanted.iter().any(|(n, _, _)| *n == g.name))
+            .collect();
+        if wanted.is_empty() && generated.is_empty() {
             return Ok(Vec::new());
         }
         let Some(shader) = loaded.front.shader.as_ref() else {
@@ -163,6 +169,32 @@ impl SceneArgs {
                     .map_err(|err| fail(format!("{}: {err}", path.display()), 1))?;
             }
             textures.push((name, data));
+        }
+        for g in generated {
+            let fail = |message: String| {
+                match scene {
+                    Some(scene) => eprint!("{}", scene.texture_error(&g.name, &message)),
+                    None => eprintln!("error: {message}"),
+                }
+                ExitCode::from(1)
+            };
+            let Some(binding) = bindings.iter().find(|b| b.name == g.name) else {
+                return Err(fail(format!("the shader has no sampler uniform `{}` to bind a noise texture to", g.name)));
+            };
+            let data = g.texture.generate().map_err(|err| fail(format!("`{}`: {err}", g.name)))?;
+            // Godot's noise texels are sRGB-encoded colours to a `source_color` sampler.
+            let data = if binding.srgb {
+                skyrun::TextureData::new(
+                    data.width(),
+                    data.height(),
+                    skyrun::TexelFormat::Rgba8UnormSrgb,
+                    data.bytes().to_vec(),
+                )
+                .map_err(|err| fail(format!("`{}`: {err}", g.name)))?
+            } else {
+                data
+            };
+            textures.push((g.name.clone(), data));
         }
         Ok(textures)
     }
@@ -644,19 +676,15 @@ pub struct Input {
     pub scene: Option<SceneFile>,
 }
 
-/// Opens FILE: a `.toml` is read as a scene file (its errors printed, located; exit 1 when it
-/// is wrong, 2 when it cannot be read), a `.tres`/`.tscn` is refused (not supported yet, exit
-/// 1), anything else is the shader.
+/// Opens FILE: a `.toml` is read as a scene file, a `.tres`/`.tscn` as a Godot material
+/// ([`open_material`]); errors printed, located; exit 1 when it is wrong, 2 when it cannot be
+/// read. Anything else is the shader.
 pub fn open_input(file: Option<&Path>) -> Result<Input, ExitCode> {
     let Some(path) = file else {
         return Ok(Input { shader: None, scene: None });
     };
     if gdsky::scene::is_godot_resource(path) {
-        return Err(super::usage(format!(
-            "{}: Godot materials and scenes (.tres, .tscn) are not supported yet; give a .gdshader or a scene \
-             file (.toml)",
-            path.display()
-        )));
+        return open_material(path);
     }
     if !gdsky::scene::is_scene_path(path) {
         return Ok(Input { shader: Some(path.to_path_buf()), scene: None });
@@ -669,6 +697,42 @@ pub fn open_input(file: Option<&Path>) -> Result<Input, ExitCode> {
             Err(ExitCode::from(1))
         }
     }
+}
+
+/// Opens a Godot material (`.tres`) or scene (`.tscn`) as a scene file
+/// ([`SceneFile::from_material`]): its shader (FILE itself when the shader is embedded: the
+/// loaders check it through [`gdsky::godot::check_file`]), its values as `[uniforms]` and its
+/// textures as `[textures]`, every error located in the material's file. Warnings (values of
+/// uniforms the shader lacks) are printed.
+fn open_material(path: &Path) -> Result<Input, ExitCode> {
+    use gdsky::godot::{MaterialError, MaterialShader};
+    let material = match gdsky::godot::load_sky_material(path) {
+        Ok(m) => m,
+        Err(MaterialError::Read(m)) => {
+            eprintln!("{}", m.trim_end());
+            return Err(ExitCode::from(2));
+        }
+        Err(MaterialError::Invalid(m)) => {
+            eprint!("{m}");
+            return Err(ExitCode::from(1));
+        }
+    };
+    let shader = match &material.shader {
+        MaterialShader::File(p) => p.clone(),
+        MaterialShader::Embedded { .. } => path.to_path_buf(),
+    };
+    // The values become `--set` text for the uniforms' types, so the shader is checked here;
+    // its own diagnostics are printed once, when the command loads it.
+    let front = material.check_shader().ok();
+    let settings = match front.as_ref().and_then(|f| f.shader.as_ref()) {
+        Some(checked) => material.settings(checked).map_err(|m| {
+            eprint!("{m}");
+            ExitCode::from(1)
+        })?,
+        None => Default::default(),
+    };
+    eprint!("{}", settings.warnings);
+    Ok(Input { shader: Some(shader.clone()), scene: Some(SceneFile::from_material(material, shader, settings)) })
 }
 
 /// Checks the scene file's uniforms against the loaded shader (exit 1, located, when one is
@@ -732,7 +796,7 @@ pub fn load_shader_baking(
 fn check_front(file: Option<&Path>) -> Result<gdsky::FrontendOutput, ExitCode> {
     let color = std::io::stderr().is_terminal() && std::env::var_os("NO_COLOR").is_none();
     let front = match file {
-        Some(path) => gdsky::check_file(path).map_err(|err| {
+        Some(path) => gdsky::godot::check_file(path).map_err(|err| {
             eprintln!("error: cannot read {}: {err}", path.display());
             ExitCode::from(2)
         })?,

@@ -45,9 +45,10 @@ const HEATMAPS: usize = 4;
 pub struct StressArgs {
     /// The sky shader to test (Freeman-compatible: the Freeman sky's uniforms, e.g.
     /// shaders/freeman_stable.gdshader), or a scene file (`SCENE.toml`: its shader, and its
-    /// uniforms as the base of every case; the sweep sets its own sun, altitude, views and sizes);
+    /// uniforms as the base of every case; the sweep sets its own sun, altitude, views and sizes),
+    /// or a Godot material or scene (`MATERIAL.tres`, `SCENE.tscn`: its shader and values);
     /// without one, the bundled Freeman sky.
-    #[arg(value_name = "FILE|SCENE.toml")]
+    #[arg(value_name = "FILE|SCENE.toml|MATERIAL.tres|SCENE.tscn")]
     file: Option<PathBuf>,
     /// A small sweep for CI: 3 altitudes × 5 sun elevations (with the horizon case), the
     /// scale heights at 0, small images.
@@ -178,7 +179,7 @@ fn stress(args: &StressArgs) -> Result<ExitCode, ExitCode> {
     let input = super::scene::open_input(args.file.as_deref())?;
     // A shader skyref does not model is measured against its own f64 evaluation.
     if let Some(file) = input.shader.as_deref()
-        && let Ok(front) = gdsky::check_file(file)
+        && let Ok(front) = gdsky::godot::check_file(file)
         && front.shader.as_ref().is_some_and(|s| !gdsky::measure::freeman::compatible(s))
     {
         if args.reference.is_some() {
