@@ -751,6 +751,11 @@ fn set_text(value: &Value, ty: &Type) -> Result<String, String> {
             ValueKind::Int(i) => Ok((i != 0).to_string()),
             _ => Err(found()),
         },
+        // Godot stores a bvecN as an int whose bit i is component i.
+        Type::Vector(Scalar::Bool, n) if matches!(value.kind, ValueKind::Int(_)) => {
+            let ValueKind::Int(bits) = value.kind else { return Err(found()) };
+            Ok((0..*n).map(|i| (bits >> i & 1 == 1).to_string()).collect::<Vec<_>>().join(","))
+        }
         Type::Vector(scalar, n) => {
             let n = usize::from(*n);
             let ValueKind::Constructor { name, args } = &value.kind else { return Err(found()) };
