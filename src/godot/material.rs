@@ -336,7 +336,7 @@ impl Loader {
             ValueKind::SubResource(id) => self.sub_resource(doc, id, value.span.clone()),
             ValueKind::ExtResource(id) => {
                 let (path, _) = self.ext_path(doc, id, value.span.clone())?;
-                if !is_text_resource(&path) {
+                if !path.extension().is_some_and(|e| e.eq_ignore_ascii_case("tres")) {
                     return Err(Failure::Invalid(error(
                         codes::BAD_REFERENCE,
                         file,
@@ -575,7 +575,8 @@ fn image_source(path: PathBuf, file: FileId, span: Span) -> Result<TextureSource
     ))
 }
 
-/// Whether `path` is a text resource gdsky follows (`.tres`).
+/// Whether `path` is a resource file rather than an image or a shader: a text one (`.tres`),
+/// which gdsky follows, or a binary one (`.res`), which `follow` refuses by name.
 fn is_text_resource(path: &Path) -> bool {
     path.extension().is_some_and(|e| e.eq_ignore_ascii_case("tres") || e.eq_ignore_ascii_case("res"))
 }

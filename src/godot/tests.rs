@@ -314,7 +314,10 @@ fn a_material_by_path_gives_its_shader_values_and_textures() {
     let front = material.check_shader().unwrap();
     let settings = material.settings(front.shader.as_ref().unwrap()).unwrap();
     let pairs: Vec<(&str, &str)> = settings.uniforms.iter().map(|u| (u.name.as_str(), u.text.as_str())).collect();
-    assert_eq!(pairs, [("tint", "1.0,0.5,0.25"), ("gain", "2.0"), ("steps", "8"), ("on", "true"), ("mask", "true,false,true")]);
+    assert_eq!(
+        pairs,
+        [("tint", "1.0,0.5,0.25"), ("gain", "2.0"), ("steps", "8"), ("on", "true"), ("mask", "true,false,true")]
+    );
     assert_eq!(settings.textures.len(), 1);
     assert_eq!(settings.textures[0].path, dir.join("materials/../tex/clouds.png"));
     assert!(settings.warnings.contains("W800") && settings.warnings.contains("`removed`"), "{}", settings.warnings);
@@ -451,4 +454,18 @@ fn a_noise_property_of_the_wrong_kind_is_located() {
     let material = load_sky_material(&dir.join("m.tres")).unwrap();
     let err = material.settings(front.shader.as_ref().unwrap()).unwrap_err();
     assert!(err.contains("the gradient has 3 offsets and 2 colors"), "{err}");
+}
+
+#[test]
+fn binary_resources_are_refused_by_name() {
+    let dir = project(
+        "binary",
+        &[(
+            "env.tres",
+            b"[gd_resource type=\"Environment\" format=3]\n\n[ext_resource type=\"Sky\" path=\"res://sky.res\" id=\"1\"]\n\n\
+              [resource]\nsky = ExtResource(\"1\")\n",
+        )],
+    );
+    let err = load_sky_material(&dir.join("env.tres")).unwrap_err().to_string();
+    assert!(err.contains("error[E811]") && err.contains("env.tres:6:7") && err.contains("not binary ones"), "{err}");
 }
