@@ -17,9 +17,9 @@
 //! * `invert` replaces a code c by 255 − c.
 //!
 //! `seamless` generates a larger image (a skirt of `seamless_blend_skirt` of each side, at least
-//! one texel) and rearranges and blends it into a tileable one ([`seamless`], all integer work
-//! on the codes). A `color_ramp` then maps each code c to the gradient's colour at the
-//! luminance of (c/255, c/255, c/255) (Godot's `Color::get_luminance`, f32) into an RGBA8
+//! one texel) and rearranges and blends it into a tileable one (src/noise/seamless.rs, all
+//! integer work on the codes). A `color_ramp` then maps each code c to the gradient's colour at
+//! the luminance of (c/255, c/255, c/255) (Godot's `Color::get_luminance`, f32) into an RGBA8
 //! image, each channel truncated from `value · 255`. `as_normal_map` turns the image's red
 //! channel (as f32 in 0…1) into an RGBA8 normal map: the normal of the height field from its
 //! right and lower neighbours (wrapping), scaled by `bump_strength`, stored as
@@ -28,10 +28,13 @@
 //! ## What is matched
 //!
 //! Every step above, in Godot's order of operations and types, with the `fastnoise-lite` crate
-//! (the official Rust port of FastNoiseLite 1.1, the version Godot ships in
-//! thirdparty/misc/FastNoiseLite.h) for the noise. `tests/noise_oracle.rs` compares the result
-//! texel for texel with the images real Godot 4.6 generates (through crates/skyoracle); the
-//! measured differences, and their causes, are in docs/noise.md.
+//! (the official Rust port of FastNoiseLite, 1.1.1) for the noise. Godot ships FastNoiseLite
+//! 1.1.0 (thirdparty/misc/FastNoiseLite.h), which rounds one step of the 3D OpenSimplex2 domain
+//! warp differently; that warp is computed here as 1.1.0 does (src/noise/warp3d.rs says why it
+//! matters). Godot's seamless path normalizes over two slices even for a 2D texture, which
+//! changes the codes in 3D space; that is matched too. `tests/noise_oracle.rs` compares the
+//! result texel for texel with the images real Godot 4.6 generates (through crates/skyoracle):
+//! every one of its 88 configurations is identical, byte for byte (docs/noise.md).
 //!
 //! Not matched: `generate_mipmaps` (on by default in Godot) only adds mip levels, which
 //! [`skyrun::TextureData`] does not carry: a shader that samples with mipmaps sees level 0 at
@@ -47,12 +50,14 @@
 
 mod gradient;
 mod seamless;
+mod warp3d;
 
 pub use gradient::Gradient;
 
 use fastnoise_lite as fnl;
 use gradient::Ramp;
 use std::fmt;
+use warp3d::Warp3d;
 
 /// The largest side accepted for a noise texture: Godot's inspector suggests up to 2048 (and
 /// allows more), and a texture over 4096² is more than a CPU bake should be asked for.
@@ -347,6 +352,9 @@ fn skirt(value: f64) -> Result<f32, NoiseError> {
 struct Sampler {
     noise: fnl::FastNoiseLite,
     warp: Option<fnl::FastNoiseLite>,
+    /// The 3D warp of the OpenSimplex2 types, in Godot's FastNoiseLite 1.1.0 arithmetic
+    /// ([`warp3d`]); `None` for the basic grid, whose 3D warp the crate computes as Godot does.
+    warp_3d: Option<Warp3d>,
     offset: [f32; 3],
 }
 
@@ -431,7 +439,21 @@ impl Sampler {
         for (o, v) in offset.iter_mut().zip(p.offset) {
             *o = finite("noise.offset", v)?;
         }
-        Ok(Self { noise, warp: p.domain_warp_enabled.then_some(warp), offset })
+        let warp_3d = (p.domain_warp_enabled && warp.domain_warp_type != W::BasicGrid).then(|| Warp3d {
+            seed: warp.seed,
+            amplitude: warp.domain_warp_amp,
+            frequency: warp.frequency,
+            reduced: warp.domain_warp_type == W::OpenSimplex2Reduced,
+            fractal: match warp.fractal_type {
+                F::DomainWarpProgressive => warp3d::Fractal::Progressive,
+                F::DomainWarpIndependent => warp3d::Fractal::Independent,
+                _ => warp3d::Fractal::None,
+            },
+            octaves: warp.octaves,
+            lacunarity: warp.lacunarity,
+            gain: warp.gain,
+        });
+        Ok(Self { noise, warp: p.domain_warp_enabled.then_some(warp), warp_3d, offset })
     }
 
     /// `FastNoiseLite::get_noise_2d`.
@@ -446,7 +468,9 @@ impl Sampler {
     /// `FastNoiseLite::get_noise_3d`.
     fn noise_3d(&self, x: f32, y: f32, z: f32) -> f32 {
         let (mut x, mut y, mut z) = (x + self.offset[0], y + self.offset[1], z + self.offset[2]);
-        if let Some(warp) = &self.warp {
+        if let Some(warp) = &self.warp_3d {
+            [x, y, z] = warp.warp([x, y, z]);
+        } else if let Some(warp) = &self.warp {
             (x, y, z) = warp.domain_warp_3d(x, y, z);
         }
         self.noise.get_noise_3d(x, y, z)
