@@ -16,8 +16,11 @@ use std::time::Instant;
 #[derive(Args)]
 pub struct OracleArgs {
     /// The sky shader to render in Godot; without one, the bundled Freeman sky. `#include` is not
-    /// available in the oracle (Godot's Web export has no project files to include).
-    #[arg(value_name = "FILE")]
+    /// available in the oracle (Godot's Web export has no project files to include). A Godot
+    /// material or scene (`MATERIAL.tres`, `SCENE.tscn`) gives its shader, its values (under
+    /// `--set`) and its NoiseTexture2Ds, which Godot generates itself; image textures cannot be
+    /// given to the oracle yet.
+    #[arg(value_name = "FILE | MATERIAL.tres | SCENE.tscn")]
     file: Option<PathBuf>,
     /// The EXR to write: the recovered linear COLOR, RGBA 32-bit float (alpha 1), row 0 at the top.
     #[arg(short = 'o', long = "out", value_name = "OUT.exr")]
@@ -54,14 +57,33 @@ fn oracle(args: &OracleArgs) -> Result<(), ExitCode> {
     }
     let scene = SceneArgs { projection: Some(ProjectionArg::Camera), ..args.scene.clone() };
     let (_, width, height) = scene.views().map_err(usage)?;
-    let overrides = scene.overrides().map_err(usage)?;
+    // A Godot material: its values first, so a --set of the same uniform wins.
+    let material = match args.file.as_deref().filter(|f| gdsky::scene::is_godot_resource(f)) {
+        Some(path) => super::scene::open_input(Some(path))?.scene,
+        None => None,
+    };
+    let mut overrides = material.as_ref().map(|m| m.uniform_pairs()).unwrap_or_default();
+    let flags = scene.overrides().map_err(usage)?;
+    overrides.retain(|(name, _)| !flags.iter().any(|(n, _)| n == name));
+    overrides.extend(flags);
+    if let Some(image) = material.as_ref().and_then(|m| m.textures.first()) {
+        return Err(usage(format!(
+            "`{}`: the oracle gives Godot noise textures only, not image files ({})",
+            image.name,
+            image.path.display()
+        )));
+    }
     check_outputs(&args.out, args.png.as_ref())?;
 
     // gdsky checks the shader first: the uniform types for --set, and a clear diagnostic before
     // Godot is started for nothing.
-    let loaded = super::scene::load_shader(args.file.as_deref())?;
+    let shader_file = match &material {
+        Some(m) => m.shader.clone(),
+        None => args.file.clone(),
+    };
+    let loaded = super::scene::load_shader(shader_file.as_deref())?;
     // The text the front end read and checked (not a second read of FILE, which could differ).
-    let code = match &args.file {
+    let code = match &shader_file {
         Some(_) => loaded.front.db.text(loaded.front.root).to_string(),
         None => BUNDLED_FREEMAN.to_string(),
     };
@@ -81,6 +103,9 @@ fn oracle(args: &OracleArgs) -> Result<(), ExitCode> {
         let value = oracle_value(&uniform.ty, &value)
             .ok_or_else(|| usage(format!("`--set {name}`: the oracle cannot set a `{}` uniform", uniform.type_name)))?;
         uniforms.push((name.clone(), value));
+    }
+    for g in material.iter().flat_map(|m| &m.generated_textures) {
+        uniforms.push((g.name.clone(), UniformValue::NoiseTexture2D(noise_spec(&g.texture))));
     }
 
     let mut job = Job::new(code, width, height);
@@ -137,6 +162,48 @@ fn start(root: &Path) -> Result<Oracle, ExitCode> {
         }
         ExitCode::from(2)
     })
+}
+
+/// A noise texture as the oracle's property maps: every property gdsky reads, by its Godot name
+/// (Godot then generates the texture itself).
+fn noise_spec(t: &gdsky::noise::NoiseTexture2D) -> skyoracle::NoiseTextureSpec {
+    use serde_json::{Map, Value, json};
+    let object = |v: Value| match v {
+        Value::Object(map) => map,
+        _ => Map::new(),
+    };
+    let noise = t.noise.as_ref().map(|n| {
+        object(json!({
+            "noise_type": n.noise_type, "seed": n.seed, "frequency": n.frequency, "offset": n.offset,
+            "fractal_type": n.fractal_type, "fractal_octaves": n.fractal_octaves,
+            "fractal_lacunarity": n.fractal_lacunarity, "fractal_gain": n.fractal_gain,
+            "fractal_weighted_strength": n.fractal_weighted_strength,
+            "fractal_ping_pong_strength": n.fractal_ping_pong_strength,
+            "cellular_distance_function": n.cellular_distance_function, "cellular_jitter": n.cellular_jitter,
+            "cellular_return_type": n.cellular_return_type, "domain_warp_enabled": n.domain_warp_enabled,
+            "domain_warp_type": n.domain_warp_type, "domain_warp_amplitude": n.domain_warp_amplitude,
+            "domain_warp_frequency": n.domain_warp_frequency, "domain_warp_fractal_type": n.domain_warp_fractal_type,
+            "domain_warp_fractal_octaves": n.domain_warp_fractal_octaves,
+            "domain_warp_fractal_lacunarity": n.domain_warp_fractal_lacunarity,
+            "domain_warp_fractal_gain": n.domain_warp_fractal_gain,
+        }))
+    });
+    let color_ramp = t.color_ramp.as_ref().map(|g| {
+        object(json!({
+            "offsets": g.offsets, "colors": g.colors, "interpolation_mode": g.interpolation_mode,
+            "interpolation_color_space": g.interpolation_color_space,
+        }))
+    });
+    skyoracle::NoiseTextureSpec {
+        texture: object(json!({
+            "width": t.width, "height": t.height, "invert": t.invert, "in_3d_space": t.in_3d_space,
+            "generate_mipmaps": t.generate_mipmaps, "seamless": t.seamless,
+            "seamless_blend_skirt": t.seamless_blend_skirt, "as_normal_map": t.as_normal_map,
+            "bump_strength": t.bump_strength, "normalize": t.normalize,
+        })),
+        noise,
+        color_ramp,
+    }
 }
 
 /// A checked constant as the oracle sends it, for the types Godot's `set_shader_parameter`
