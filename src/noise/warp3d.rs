@@ -133,7 +133,7 @@ impl Warp3d {
 
     /// `DoSingleDomainWarp` → `SingleDomainWarpOpenSimplex2Gradient` (1.1.0).
     fn single(&self, mut seed: i32, amp: f32, frequency: f32, s: [f32; 3], out: &mut [f32; 3]) {
-        let (warp_amp, grad_only) = if self.reduced { (amp * 7.716_049_4, true) } else { (amp * 32.694_283, false) };
+        let (warp_amp, grad_only) = if self.reduced { (amp * 7.716_049, true) } else { (amp * 32.694_283, false) };
         let vectors = random_vectors();
         let corner = |seed: i32, i: i32, j: i32, k: i32, d: [f32; 3]| -> [f32; 3] {
             let h = hash(seed, i, j, k);
