@@ -469,3 +469,34 @@ fn binary_resources_are_refused_by_name() {
     let err = load_sky_material(&dir.join("env.tres")).unwrap_err().to_string();
     assert!(err.contains("error[E811]") && err.contains("env.tres:6:7") && err.contains("not binary ones"), "{err}");
 }
+
+#[test]
+fn no_truncation_of_a_material_panics_the_loader() {
+    let material = std::fs::read(fixture("materials/sky_material.tres")).unwrap();
+    let dir = project(
+        "truncated",
+        &[
+            ("shaders/test_sky.gdshader", &std::fs::read(fixture("shaders/test_sky.gdshader")).unwrap()),
+            ("textures/bands.png", &std::fs::read(fixture("textures/bands.png")).unwrap()),
+        ],
+    );
+    let path = dir.join("m.tres");
+    let mut loaded = 0;
+    for end in 0..=material.len() {
+        std::fs::write(&path, &material[..end]).unwrap();
+        if let Ok(m) = load_sky_material(&path) {
+            loaded += 1;
+            if let Ok(front) = m.check_shader()
+                && let Some(shader) = front.shader.as_ref()
+            {
+                let _ = m.settings(shader);
+            }
+        }
+    }
+    // Only the prefixes that end after the last property's value (or within the trailing
+    // newline) still name a shader.
+    assert!(loaded > 0 && loaded < material.len() / 2, "{loaded}");
+    // A folder named like a material is not read (regular files only): unreadable, exit 2.
+    std::fs::create_dir_all(dir.join("folder.tres")).unwrap();
+    assert!(matches!(load_sky_material(&dir.join("folder.tres")), Err(MaterialError::Read(_))));
+}
