@@ -36,10 +36,10 @@
 //! result texel for texel with the images real Godot 4.6 generates (through crates/skyoracle):
 //! every one of its 88 configurations is identical, byte for byte (docs/noise.md).
 //!
-//! Not matched: `generate_mipmaps` (on by default in Godot) only adds mip levels, which
-//! [`skyrun::TextureData`] does not carry: a shader that samples with mipmaps sees level 0 at
-//! every distance. 3D textures ([`NoiseTexture3D::image`]) are generated, but skyrun cannot bind
-//! a 3D texture yet.
+//! Not bound: `generate_mipmaps` (on by default in Godot) adds mip levels, which
+//! [`NoiseImage::mipmaps`] makes as Godot does but [`skyrun::TextureData`] does not carry: a
+//! shader that samples with mipmaps sees level 0 at every distance. 3D textures
+//! ([`NoiseTexture3D::image`]) are generated, but skyrun cannot bind a 3D texture yet.
 //!
 //! ## How a shader sees it
 //!
@@ -274,6 +274,42 @@ impl NoiseImage {
             NoiseFormat::L8 => self.data.iter().flat_map(|&v| [v, v, v, 255]).collect(),
             NoiseFormat::Rgba8 => self.data.clone(),
         }
+    }
+}
+
+impl NoiseImage {
+    /// The mip levels Godot's `Image::generate_mipmaps` adds below this image (level 1 first,
+    /// down to 1 × 1; none for a 1 × 1 image): each texel of a level is
+    /// `(a + b + c + d + 2) >> 2` of the 2 × 2 texels above it, per byte; an odd side drops its
+    /// last row or column, and a side of 1 repeats its texel. skyrun cannot bind levels yet,
+    /// so [`NoiseTexture2D::generate`] does not use them.
+    pub fn mipmaps(&self) -> Vec<NoiseImage> {
+        let channels = self.format.bytes_per_texel();
+        let mut levels: Vec<NoiseImage> = Vec::new();
+        let (mut w, mut h) = (self.width as usize, self.height as usize);
+        while w > 1 || h > 1 {
+            let src = levels.last().map_or(&self.data, |l| &l.data);
+            let (dw, dh) = ((w / 2).max(1), (h / 2).max(1));
+            let right = if w == 1 { 0 } else { channels };
+            let down = if h == 1 { 0 } else { w * channels };
+            let mut data = Vec::with_capacity(dw * dh * channels);
+            for i in 0..dh {
+                let up = i * 2 * down;
+                for j in 0..dw {
+                    let at = up + j * 2 * right;
+                    for c in 0..channels {
+                        let sum = [at, at + right, at + down, at + down + right]
+                            .iter()
+                            .map(|&k| u32::from(src[k + c]))
+                            .sum::<u32>();
+                        data.push(((sum + 2) >> 2) as u8);
+                    }
+                }
+            }
+            levels.push(NoiseImage { width: dw as u32, height: dh as u32, format: self.format, data });
+            (w, h) = (dw, dh);
+        }
+        levels
     }
 }
 
@@ -727,6 +763,21 @@ mod tests {
         );
         let ramp = Gradient { interpolation_mode: 7, ..Gradient::default() };
         refused(NoiseTexture2D { color_ramp: Some(ramp), ..texture(4, 4) }, "`color_ramp`");
+    }
+
+    #[test]
+    fn mipmaps_halve_down_to_one_texel() {
+        let image =
+            NoiseImage { width: 5, height: 3, format: NoiseFormat::L8, data: (0..15).map(|v| v * 10).collect() };
+        let levels = image.mipmaps();
+        let sizes: Vec<(u32, u32)> = levels.iter().map(|l| (l.width, l.height)).collect();
+        assert_eq!(sizes, [(2, 1), (1, 1)]);
+        // (0 + 10 + 50 + 60 + 2) >> 2 = 30, (20 + 30 + 70 + 80 + 2) >> 2 = 50; the fifth column
+        // and the third row are dropped.
+        assert_eq!(levels[0].data, [30, 50]);
+        assert_eq!(levels[1].data, [40]);
+        let single = NoiseImage { width: 1, height: 1, format: NoiseFormat::Rgba8, data: vec![1, 2, 3, 4] };
+        assert!(single.mipmaps().is_empty());
     }
 
     #[test]

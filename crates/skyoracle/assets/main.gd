@@ -359,7 +359,11 @@ func _noise(job: Dictionary) -> Dictionary:
 			level0.clear_mipmaps()
 		layers.append(Marshalls.raw_to_base64(level0.get_data()))
 	var first: Image = images[0]
-	return {"width": first.get_width(), "height": first.get_height(), "format": _format_name(first.get_format()), "mipmaps": mipmaps, "layers": layers}
+	# Levels 1… as Godot stores them after level 0 (a 2D image only).
+	var mip_data := ""
+	if not volume and first.get_mipmap_count() > 0:
+		mip_data = Marshalls.raw_to_base64(first.get_data().slice(first.get_mipmap_offset(1)))
+	return {"width": first.get_width(), "height": first.get_height(), "format": _format_name(first.get_format()), "mipmaps": mipmaps, "layers": layers, "mip_data": mip_data}
 
 
 ## The values a new instance of a class has for the named properties (Vector3 and packed arrays

@@ -161,8 +161,8 @@
 //! names; `main.gd` converts each value to the property's type and refuses an unknown name or a
 //! value that does not take), waits for its `changed` signal (the first generation runs
 //! synchronously in a deferred call at the end of the frame) and returns level 0 of
-//! `get_image()` in Godot's own format, L8 or RGBA8, as base64 ([`GodotNoiseImage`]; whether
-//! mipmaps were generated is reported, the levels are dropped). [`Oracle::noise_volume`] does
+//! `get_image()` in Godot's own format, L8 or RGBA8, as base64 ([`GodotNoiseImage`], with the
+//! mip levels below it when Godot generated them). [`Oracle::noise_volume`] does
 //! the same for a `NoiseTexture3D`, but reads its slices from the calls its generation makes
 //! (`get_image_3d` / `get_seamless_image_3d`, then the colour ramp through `Gradient.sample`
 //! of each texel's luminance): `NoiseTexture3D.get_data()` goes through the Compatibility

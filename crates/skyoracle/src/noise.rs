@@ -57,10 +57,14 @@ pub struct GodotNoiseImage {
     pub height: u32,
     /// Godot's image format: `L8` (no colour ramp), `RGBA8` (a colour ramp or a normal map).
     pub format: String,
-    /// Whether Godot's image carried mipmaps (they are dropped here).
+    /// Whether Godot's image carried mipmaps (levels 1… are in [`Self::mipmap_data`]).
     pub mipmaps: bool,
     /// Level 0 of each image, row 0 first, in `format`.
     pub layers: Vec<Vec<u8>>,
+    /// For a 2D texture with mipmaps, levels 1, 2, … down to 1 × 1 as Godot stores them after
+    /// level 0 (each level's rows in order, sides halved and floored, at least 1); empty
+    /// otherwise.
+    pub mipmap_data: Vec<u8>,
 }
 
 impl Oracle {
@@ -109,7 +113,13 @@ impl Oracle {
             return Err(self.protocol(&format!("noise layers are not {width}×{height} {format}")));
         }
         let mipmaps = reply.get("mipmaps").and_then(Value::as_bool).unwrap_or(false);
-        Ok(GodotNoiseImage { width, height, format, mipmaps, layers })
+        let mipmap_data = match reply.get("mip_data").and_then(Value::as_str) {
+            None | Some("") => Vec::new(),
+            Some(text) => base64::engine::general_purpose::STANDARD
+                .decode(text)
+                .map_err(|_| self.protocol("a noise reply whose mipmaps are not base64"))?,
+        };
+        Ok(GodotNoiseImage { width, height, format, mipmaps, layers, mipmap_data })
     }
 
     /// The values a new instance of Godot class `class` has for `properties` (Vector3 and packed
