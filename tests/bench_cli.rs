@@ -267,3 +267,51 @@ fn a_supersampled_truth_sees_aliasing_at_a_hard_edge() {
     let o = gdsky(&["bench", freeman.to_str().unwrap(), "--truth-supersample", "2"], &dir);
     assert_eq!(o.status.code(), Some(1), "{}", text(&o));
 }
+
+/// `--sky-resolution full,half,quarter` adds the shading resolution as a dimension of the sweep:
+/// a `sky_resolution` column (divisor 1, 2, 4), every configuration at each, measured against
+/// the full-resolution truth. A sky with a hard edge loses accuracy as the resolution drops.
+#[test]
+fn the_sky_resolution_is_swept_against_the_full_resolution_truth() {
+    let dir = scratch("sky_resolution");
+    let file = dir.join("edge.gdshader");
+    std::fs::write(
+        &file,
+        "shader_type sky;\nconst int STEPS = 8;\n\
+         void sky() { float a = 0.0;\nfor (int i = 0; i < STEPS; i++) { a += exp(-4.0 * (float(i) + 0.5) / float(STEPS)); }\n\
+         COLOR = vec3(a / float(STEPS)) * (EYEDIR.y > 0.3 ? 1.0 : 0.25); }\n",
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let args = [
+        "bench",
+        file.to_str().unwrap(),
+        "--size",
+        "32x16",
+        "--runs",
+        "1",
+        "--knob",
+        "STEPS=64",
+        "--sky-resolution",
+        "full,half,quarter",
+        "-o",
+        out.to_str().unwrap(),
+    ];
+    let o = gdsky(&args, &dir);
+    assert!(o.status.success(), "{}", text(&o));
+    let csv = std::fs::read_to_string(out.join("bench.csv")).expect("bench.csv");
+    let lines: Vec<&str> = csv.lines().collect();
+    assert!(lines[0].starts_with("shader,STEPS,sky_resolution,time_ms"), "{csv}");
+    let mean = |divisor: &str| -> f64 {
+        let line = lines.iter().find(|l| l.split(',').nth(2) == Some(divisor)).unwrap_or_else(|| panic!("{csv}"));
+        line.split(',').nth(9).and_then(|v| v.parse().ok()).expect("mean_rel")
+    };
+    let (full, half, quarter) = (mean("1"), mean("2"), mean("4"));
+    // Full: only the 64-step loop's sampling error against the converged truth (~1e-3).
+    assert!(full < 5e-3, "{csv}");
+    assert!(half > 2.0 * full && quarter > half, "the edge blurs over more pixels as the resolution drops:\n{csv}");
+    let bad = ["bench", file.to_str().unwrap(), "--sky-resolution", "full,eighth", "-o", out.to_str().unwrap()];
+    let o = gdsky(&bad, &dir);
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    assert!(text(&o).contains("not a sky resolution"), "{}", text(&o));
+}

@@ -46,7 +46,7 @@ use super::sweep::{self, ErrorStats};
 use super::{environment, usage};
 use clap::{ArgMatches, Args, ValueEnum};
 use gdsky::measure::freeman::{TruthMode, cache_dir, cached_truth};
-use gdsky::measure::knobs::{Knob, combinations};
+use gdsky::measure::knobs::{self, Knob, combinations};
 use gdsky::measure::{any, pareto};
 use plotters::prelude::*;
 use skyref::converged::Converged;
@@ -125,6 +125,12 @@ pub struct BenchArgs {
     /// shader's aliasing (hashed stars, hard sun edges) [default: 1, the pixel centre].
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=8))]
     truth_supersample: Option<u32>,
+    /// For a shader that is not Freeman-compatible: also sweep the resolution the sky is shaded
+    /// at (`full,half,quarter`, any of them): each configuration is rendered at each, upsampled
+    /// bilinearly to the image size (as `render --sky-resolution`), and measured against the
+    /// full-resolution truth. The column `sky_resolution` holds the divisor: 1, 2 or 4.
+    #[arg(long, value_name = "full,half,quarter")]
+    sky_resolution: Option<String>,
     #[command(flatten)]
     scene: SceneArgs,
     #[command(flatten)]
@@ -484,6 +490,12 @@ fn bench(args: &BenchArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
             "--converge-tol and --truth-supersample set the sampling truth of shaders that are not Freeman-compatible",
         ));
     }
+    if args.sky_resolution.is_some() {
+        return Err(usage(
+            "--sky-resolution sweeps shaders that are not Freeman-compatible; for the Freeman sky, --skipping times \
+             the half and quarter resolutions",
+        ));
+    }
     let truth_mode = truth_from_args(args.truth, args.truth_samples).map_err(usage)?;
     let (views, width, height) = scene_args.views().map_err(usage)?;
     let mut base = FreemanParams::default();
@@ -823,8 +835,13 @@ fn bench_any(args: &BenchArgs, file: &Path, scene_args: &SceneArgs) -> Result<()
     let front =
         gdsky::godot::check_file(file).map_err(|e| environment(format!("cannot read {}: {e}", file.display())))?;
     let sky = any::Sky::new(front, scene_args.overrides().map_err(usage)?).map_err(usage)?;
-    let knobs = any_knobs(&sky, &args.knobs).map_err(usage)?;
+    let mut knobs = any_knobs(&sky, &args.knobs).map_err(usage)?;
+    if let Some(text) = &args.sky_resolution {
+        knobs.push(Knob::sky_resolutions(text).map_err(|e| usage(format!("--sky-resolution: {e}")))?);
+    }
     let names: Vec<String> = knobs.iter().map(|k| k.name.clone()).collect();
+    // The truth raises the quality knobs only; it is shaded at full resolution.
+    let raised: Vec<String> = names.iter().filter(|n| *n != knobs::SKY_RESOLUTION).cloned().collect();
     let defaults: Vec<i32> = sky.defaults(&names).into_iter().map(|(_, v)| v).collect();
     let mut configs = combinations(&knobs);
     if !configs.contains(&defaults) {
@@ -848,7 +865,7 @@ fn bench_any(args: &BenchArgs, file: &Path, scene_args: &SceneArgs) -> Result<()
         supersample: args.truth_supersample.unwrap_or(1),
     };
     let truth =
-        any::converge(&gpu, &sky, &setting(&defaults), &names, &shots, limits, |m| bar.set_message(m.to_string()))
+        any::converge(&gpu, &sky, &setting(&defaults), &raised, &shots, limits, |m| bar.set_message(m.to_string()))
             .map_err(|e| {
                 bar.suspend(|| eprintln!("error: {e}"));
                 ExitCode::from(1)
@@ -927,7 +944,7 @@ fn bench_any(args: &BenchArgs, file: &Path, scene_args: &SceneArgs) -> Result<()
         truth_time,
         sweep::FLOOR
     );
-    if names.is_empty() {
+    if raised.is_empty() {
         println!(
             "knobs    none (no int uniform with a hint_range or int const bounds a loop): the truth is the f64 evaluation alone"
         );

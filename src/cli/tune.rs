@@ -23,7 +23,7 @@ use super::sweep;
 use super::{environment, usage};
 use clap::Args;
 use gdsky::measure::any::{self, Candidate, Shot};
-use gdsky::measure::knobs::{KnobKind, combinations, specialize_source};
+use gdsky::measure::knobs::{Knob, KnobKind, SKY_RESOLUTION, combinations, specialize_source};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -63,6 +63,12 @@ pub struct TuneArgs {
     /// shader's aliasing (hashed stars, hard sun edges) [default: 1, the pixel centre].
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=8))]
     truth_supersample: Option<u32>,
+    /// For a shader that is not Freeman-compatible: also sweep the resolution the sky is shaded
+    /// at (`full,half,quarter`, any of them): each configuration is rendered at each, upsampled
+    /// bilinearly to the image size (as `render --sky-resolution`), and measured against the
+    /// full-resolution truth. The column `sky_resolution` holds the divisor: 1, 2 or 4.
+    #[arg(long, value_name = "full,half,quarter")]
+    sky_resolution: Option<String>,
     /// Folder for the specialized shader and tune.csv (created if missing; checked first).
     #[arg(short = 'o', long = "out-dir", value_name = "DIR", default_value = "out/tune")]
     out_dir: PathBuf,
@@ -135,7 +141,13 @@ fn tune(args: &TuneArgs) -> Result<(), ExitCode> {
             "--truth-supersample sets the sampling truth; a Freeman-compatible shader is measured against skyref's integrals",
         ));
     }
-    let knobs = any_knobs(&sky, &args.knobs).map_err(usage)?;
+    let mut knobs = any_knobs(&sky, &args.knobs).map_err(usage)?;
+    if let Some(text) = &args.sky_resolution {
+        if freeman {
+            return Err(usage("--sky-resolution is swept for shaders that are not Freeman-compatible"));
+        }
+        knobs.push(Knob::sky_resolutions(text).map_err(|e| usage(format!("--sky-resolution: {e}")))?);
+    }
     if knobs.is_empty() {
         return Err(usage(format!(
             "{}: no knob to tune (no int uniform or int const bounds a loop; name one with --knob)",
@@ -143,6 +155,8 @@ fn tune(args: &TuneArgs) -> Result<(), ExitCode> {
         )));
     }
     let names: Vec<String> = knobs.iter().map(|k| k.name.clone()).collect();
+    // The truth raises the quality knobs only; it is shaded at full resolution.
+    let raised: Vec<String> = names.iter().filter(|n| *n != SKY_RESOLUTION).cloned().collect();
     let defaults: Vec<i32> = sky.defaults(&names).into_iter().map(|(_, v)| v).collect();
     let mut configs = combinations(&knobs);
     if !configs.contains(&defaults) {
@@ -169,7 +183,7 @@ fn tune(args: &TuneArgs) -> Result<(), ExitCode> {
             supersample: args.truth_supersample.unwrap_or(1),
         };
         let c =
-            any::converge(&gpu, &sky, &setting(&defaults), &names, &shots, limits, |m| bar.set_message(m.to_string()))
+            any::converge(&gpu, &sky, &setting(&defaults), &raised, &shots, limits, |m| bar.set_message(m.to_string()))
                 .map_err(usage)?;
         let text = format!("the sampling truth: f64 at {}", any::label(&c.setting));
         (c.images.clone(), text, Some(c))
@@ -274,6 +288,14 @@ fn tune(args: &TuneArgs) -> Result<(), ExitCode> {
         best.worst_mean(),
         best.worst_p99()
     );
+    if let Some((_, divisor)) = best.setting.iter().find(|(n, _)| n == SKY_RESOLUTION) {
+        let words = match divisor {
+            2 => "half (`render --sky-resolution half`)",
+            4 => "quarter (`render --sky-resolution quarter`)",
+            _ => "full",
+        };
+        println!("render:  at {words} sky resolution: a render option, not in the shader");
+    }
     let baked: Vec<(String, i32, KnobKind)> =
         best.setting.iter().map(|(n, v)| (n.clone(), *v, sky.kind_of(n))).collect();
     let text = specialize_source(&sky.front, &baked).map_err(usage)?;

@@ -10,7 +10,7 @@
 use super::knobs::{self, Discovered, KnobKind};
 use super::stats::{self, ErrorStats};
 use skyref::{Projection, Scene};
-use skyrun::{F64Sky, Gpu, SkyBuiltins, SkyShader};
+use skyrun::{F64Sky, Gpu, RenderOptions, SkyBuiltins, SkyResolution, SkyShader};
 use std::collections::HashMap;
 use std::time::Duration;
 
@@ -82,6 +82,9 @@ impl Sky {
 
     /// Whether `name` is an int uniform (set in the material) or else taken as a const.
     pub fn kind_of(&self, name: &str) -> KnobKind {
+        if name == knobs::SKY_RESOLUTION {
+            return KnobKind::SkyResolution;
+        }
         let int = gdshader::check::types::Type::Scalar(gdshader::check::types::Scalar::Int);
         let uniform =
             self.front.shader.as_ref().is_some_and(|s| s.uniforms.iter().any(|u| u.name == name && u.ty == int));
@@ -95,7 +98,13 @@ impl Sky {
 
     /// The shader's own values of `names` (the default setting).
     pub fn defaults(&self, names: &[String]) -> Setting {
-        names.iter().map(|n| (n.clone(), self.knobs.iter().find(|k| &k.name == n).map_or(0, |k| k.default))).collect()
+        let default = |n: &String| {
+            if n == knobs::SKY_RESOLUTION {
+                return 1; // full resolution
+            }
+            self.knobs.iter().find(|k| &k.name == n).map_or(0, |k| k.default)
+        };
+        names.iter().map(|n| (n.clone(), default(n))).collect()
     }
 
     /// The shader at `setting`: const knobs baked into the source and checked again (one
@@ -123,7 +132,13 @@ impl Sky {
                 .filter(|(n, _)| self.kind_of(n) == KnobKind::Uniform)
                 .map(|(n, v)| (n.clone(), v.to_string())),
         );
-        Ok(Variant { front, sets })
+        let resolution = match setting.iter().find(|(n, _)| n == knobs::SKY_RESOLUTION).map(|(_, v)| *v) {
+            None | Some(1) => SkyResolution::Full,
+            Some(2) => SkyResolution::Half,
+            Some(4) => SkyResolution::Quarter,
+            Some(v) => return Err(format!("{} is 1 (full), 2 (half) or 4 (quarter), not {v}", knobs::SKY_RESOLUTION)),
+        };
+        Ok(Variant { front, sets, resolution })
     }
 }
 
@@ -141,12 +156,17 @@ pub struct Variant {
     pub front: gdshader::FrontendOutput,
     /// Uniform values over the defaults, as text.
     pub sets: Vec<(String, String)>,
+    /// The resolution its f32 renders shade the sky at ([`knobs::SKY_RESOLUTION`]); the f64
+    /// evaluation is always full.
+    pub resolution: SkyResolution,
 }
 
 /// An f32 module compiled on a device, with its material block.
 pub struct Compiled {
     /// The pipelines.
     pub shader: SkyShader,
+    /// The resolution it shades the sky at (upsampled to the shot's size, bilinear).
+    pub resolution: SkyResolution,
     /// The lowered module (its material layout).
     pub lowered: gdsky_naga::Lowered,
     /// The material block filled from the defaults and [`Variant::sets`].
@@ -186,7 +206,7 @@ impl Variant {
             .with_texture_defaults(skyrun::texture_defaults(shader, &lowered))
             .with_material_textures(gpu, gdsky_naga::reflect::texture_bindings(shader, &lowered));
         let material = self.material(&lowered)?;
-        Ok(Compiled { shader: compiled, lowered, material })
+        Ok(Compiled { shader: compiled, resolution: self.resolution, lowered, material })
     }
 
     /// Compiles the f64 evaluation (`skyrun::F64Sky`).
@@ -206,9 +226,10 @@ impl Compiled {
         shot: &Shot,
         builtins: &SkyBuiltins,
     ) -> Result<(Vec<[f32; 4]>, Duration), String> {
+        let options = RenderOptions { resolution: self.resolution, ..RenderOptions::default() };
         let r = self
             .shader
-            .render(gpu, shot.projection, shot.width, shot.height, builtins, &self.material)
+            .render_with(gpu, shot.projection, shot.width, shot.height, builtins, &self.material, &options)
             .map_err(|e| e.to_string())?;
         let time = r.gpu_time.unwrap_or(r.gpu_wait);
         Ok((r.pixels, time))
@@ -222,9 +243,10 @@ impl Compiled {
         builtins: &SkyBuiltins,
         material: &[u8],
     ) -> Result<Vec<[f32; 4]>, String> {
+        let options = RenderOptions { resolution: self.resolution, ..RenderOptions::default() };
         let r = self
             .shader
-            .render(gpu, shot.projection, shot.width, shot.height, builtins, material)
+            .render_with(gpu, shot.projection, shot.width, shot.height, builtins, material, &options)
             .map_err(|e| e.to_string())?;
         Ok(r.pixels)
     }

@@ -28,7 +28,15 @@ pub enum KnobKind {
     Uniform,
     /// A global `int` const: baked per configuration by rewriting its initializer.
     Const,
+    /// [`SKY_RESOLUTION`]: the resolution the sky is shaded at (1 full, 2 half, 4 quarter,
+    /// upsampled to the target; issue #8's `--sky-resolution`), a render option swept like a
+    /// knob, never baked into the shader.
+    SkyResolution,
 }
+
+/// The name of the sky-resolution dimension of a sweep (`--sky-resolution` on `bench` and
+/// `tune`): its values are the divisor of each side, 1 (full), 2 (half) or 4 (quarter).
+pub const SKY_RESOLUTION: &str = "sky_resolution";
 
 /// One swept integer and its values.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -45,6 +53,25 @@ impl Knob {
     /// A uniform knob.
     pub fn uniform(name: impl Into<String>, values: Vec<i32>) -> Knob {
         Knob { name: name.into(), values, kind: KnobKind::Uniform }
+    }
+
+    /// The sky-resolution dimension from `--sky-resolution full,half,quarter` (any non-empty
+    /// subset, in any order, no repeats): values 1, 2, 4.
+    pub fn sky_resolutions(text: &str) -> Result<Knob, String> {
+        let mut values = Vec::new();
+        for word in text.split(',').map(str::trim) {
+            let v = match word {
+                "full" => 1,
+                "half" => 2,
+                "quarter" => 4,
+                _ => return Err(format!("`{word}` is not a sky resolution: full, half or quarter, comma-separated")),
+            };
+            if values.contains(&v) {
+                return Err(format!("`{word}` is given twice"));
+            }
+            values.push(v);
+        }
+        Ok(Knob { name: SKY_RESOLUTION.into(), values, kind: KnobKind::SkyResolution })
     }
 }
 
@@ -334,6 +361,9 @@ pub fn specialize_source(front: &gdshader::FrontendOutput, set: &[(String, i32, 
     let int = Type::Scalar(Scalar::Int);
     let mut edits: Vec<(std::ops::Range<usize>, String)> = Vec::new();
     for (name, value, kind) in set {
+        if *kind == KnobKind::SkyResolution {
+            continue; // a render option: nothing in the source to change
+        }
         let found = shader.ast.items.iter().find_map(|item| match (&item.kind, kind) {
             (ItemKind::Uniform(u), KnobKind::Uniform)
                 if u.name.name == *name && shader.uniforms.iter().any(|i| i.name == *name && i.ty == int) =>
