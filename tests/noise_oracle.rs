@@ -623,3 +623,27 @@ fn a_sky_sampling_a_noise_texture_renders_like_godot() {
         assert!(over > (w * h) as usize, "{name}: another seed fails the bound in only {over} channels");
     }
 }
+
+#[test]
+fn the_oracle_refuses_what_godot_would_not_take() {
+    let mut oracle = start();
+    let refused = |oracle: &mut Oracle, spec: NoiseTextureSpec, what: &str| match oracle.noise_image(&spec) {
+        Err(skyoracle::OracleError::Godot(message)) => {
+            assert!(message.contains(what), "{message:?} does not say {what:?}")
+        }
+        Err(e) => panic!("expected a refusal saying {what:?}, got {e}"),
+        Ok(image) => panic!("expected a refusal saying {what:?}, got a {}×{} image", image.width, image.height),
+    };
+    let with_noise = |texture: Value, noise: Value| NoiseTextureSpec {
+        texture: object(texture),
+        noise: Some(object(noise)),
+        color_ramp: None,
+    };
+    refused(&mut oracle, with_noise(json!({ "widht": 8 }), json!({})), "no property named widht");
+    refused(&mut oracle, with_noise(json!({}), json!({ "offset": "far" })), "cannot take the value far");
+    refused(&mut oracle, with_noise(json!({ "width": 8.5 }), json!({})), "cannot take the value 8.5");
+    refused(&mut oracle, NoiseTextureSpec { noise: None, ..with_noise(json!({ "width": 8 }), json!({})) }, "no noise");
+    // A refusal does not stop the oracle.
+    let fine = oracle.noise_image(&with_noise(json!({ "width": 8, "height": 4 }), json!({}))).expect("a valid spec");
+    assert_eq!((fine.width, fine.height, fine.format.as_str()), (8, 4, "L8"));
+}

@@ -247,6 +247,8 @@ func _set_properties(object: Object, properties: Dictionary, order: Array) -> St
 		if not types.has(name):
 			return "%s has no property named %s" % [object.get_class(), name]
 		var v = properties[name]
+		if not _json_fits(v, types[name]):
+			return "%s.%s cannot take the value %s" % [object.get_class(), name, str(v)]
 		match types[name]:
 			TYPE_INT:
 				v = int(v)
@@ -270,6 +272,26 @@ func _set_properties(object: Object, properties: Dictionary, order: Array) -> St
 		if typeof(object.get(name)) != types[name]:
 			return "%s.%s did not take the value %s" % [object.get_class(), name, str(properties[name])]
 	return ""
+
+
+## Whether a JSON value has the shape a property of Variant type `type` needs (JSON numbers
+## arrive as floats; an integer property takes a whole number).
+func _json_fits(v, type: int) -> bool:
+	var number := func(x): return typeof(x) == TYPE_FLOAT or typeof(x) == TYPE_INT
+	match type:
+		TYPE_INT:
+			return number.call(v) and float(v) == floor(float(v))
+		TYPE_FLOAT:
+			return number.call(v)
+		TYPE_BOOL:
+			return typeof(v) == TYPE_BOOL
+		TYPE_VECTOR3:
+			return typeof(v) == TYPE_ARRAY and v.size() == 3 and v.all(number)
+		TYPE_PACKED_FLOAT32_ARRAY:
+			return typeof(v) == TYPE_ARRAY and v.all(number)
+		TYPE_PACKED_COLOR_ARRAY:
+			return typeof(v) == TYPE_ARRAY and v.all(func(c): return typeof(c) == TYPE_ARRAY and c.size() == 4 and c.all(number))
+	return false
 
 
 ## A NoiseTexture2D (or 3D) built from {"texture": {...}, "noise": {...} or null,

@@ -159,7 +159,7 @@
 //! [`Oracle::noise_image`] has Godot build a `NoiseTexture2D` with a `FastNoiseLite` (and a
 //! `Gradient` colour ramp) from JSON maps of their properties ([`NoiseTextureSpec`], by Godot's
 //! names; `main.gd` converts each value to the property's type and refuses an unknown name or a
-//! value that does not take), waits for its `changed` signal (the first generation runs
+//! value of the wrong shape, such as a fraction for an integer property), waits for its `changed` signal (the first generation runs
 //! synchronously in a deferred call at the end of the frame) and returns level 0 of
 //! `get_image()` in Godot's own format, L8 or RGBA8, as base64 ([`GodotNoiseImage`], with the
 //! mip levels below it when Godot generated them). [`Oracle::noise_volume`] does
