@@ -153,11 +153,6 @@ fn main() -> ExitCode {
         Command::Compare(args) => cli::compare::run(&args),
         Command::Demo(args) => cli::demo::run(&args),
         Command::Oracle(args) => cli::oracle::run(&args),
-        // bench takes Freeman-compatible skies only (the Freeman sky's 22 uniforms, none a
-        // sampler), so no texture can apply: refused here rather than ignored.
-        Command::Bench(_) if cli::scene::texture_given(&sub) => {
-            cli::usage("--texture: `bench` measures Freeman-compatible skies, which have no sampler uniforms")
-        }
         Command::Bench(args) => cli::bench::run(&args, &sub),
         Command::Stress(args) => cli::stress::run(&args),
         Command::Animate(args) => cli::animate::run(&args, &sub),

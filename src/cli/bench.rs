@@ -483,7 +483,13 @@ fn bench(args: &BenchArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
                 "--skipping, --bake-scene and --override apply to Freeman-compatible shaders only (for now)",
             ));
         }
-        return bench_any(args, file, scene_args);
+        return bench_any(args, file, scene_args, input.scene.as_ref());
+    }
+    if !scene_args.texture.is_empty() || input.scene.as_ref().is_some_and(|s| !s.textures.is_empty()) {
+        return Err(usage(
+            "--texture and a scene's [textures] apply to shaders that are not Freeman-compatible; a Freeman-compatible \
+             shader's tables (freeman_lut's transmittance_table) are baked automatically",
+        ));
     }
     if args.converge_tol.is_some() || args.truth_supersample.is_some() {
         return Err(usage(
@@ -829,12 +835,19 @@ pub fn convergence_table(c: &any::Converged) -> String {
 
 /// `bench` for a shader that is not Freeman-compatible: the knobs swept, each configuration
 /// against the sampling truth (the same shader at converged knobs, in f64).
-fn bench_any(args: &BenchArgs, file: &Path, scene_args: &SceneArgs) -> Result<(), ExitCode> {
+fn bench_any(
+    args: &BenchArgs,
+    file: &Path,
+    scene_args: &SceneArgs,
+    scene_file: Option<&gdsky::scene::SceneFile>,
+) -> Result<(), ExitCode> {
     let (views, width, height) = scene_args.views().map_err(usage)?;
     super::check_output_dir(&args.out_dir, true, &["bench.csv", "bench.png"])?;
     let front =
         gdsky::godot::check_file(file).map_err(|e| environment(format!("cannot read {}: {e}", file.display())))?;
-    let sky = any::Sky::new(front, scene_args.overrides().map_err(usage)?).map_err(usage)?;
+    let loaded = super::scene::load_shader(Some(file))?;
+    let textures = scene_args.textures(scene_file, &loaded)?;
+    let sky = any::Sky::new(front, scene_args.overrides().map_err(usage)?).map_err(usage)?.with_textures(textures);
     let mut knobs = any_knobs(&sky, &args.knobs).map_err(usage)?;
     if let Some(text) = &args.sky_resolution {
         knobs.push(Knob::sky_resolutions(text).map_err(|e| usage(format!("--sky-resolution: {e}")))?);
@@ -916,7 +929,6 @@ fn bench_any(args: &BenchArgs, file: &Path, scene_args: &SceneArgs) -> Result<()
         .collect();
     mark_pareto(&mut rows);
     let name = subject_names(&[Some(file.to_path_buf())]).remove(0);
-    let loaded = super::scene::load_shader(Some(file))?;
     let subjects =
         vec![Subject { name: name.clone(), file: Some(file.to_path_buf()), loaded, knobs, configs, defaults }];
 

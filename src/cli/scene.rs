@@ -657,11 +657,6 @@ pub fn check_override_conflicts(
     Ok(())
 }
 
-/// Whether `--texture` was given (for the commands that take [`SceneArgs`] but cannot use it).
-pub fn texture_given(matches: &ArgMatches) -> bool {
-    matches.try_get_many::<String>("texture").ok().flatten().is_some_and(|mut v| v.next().is_some())
-}
-
 /// Whether the flag `id` was given on the command line (not a default, not absent).
 pub fn given(matches: &ArgMatches, id: &str) -> bool {
     matches.try_contains_id(id).unwrap_or(false)

@@ -70,6 +70,9 @@ pub struct Sky {
     pub knobs: Vec<Discovered>,
     /// Uniform values set on top of the defaults for every configuration (`--set`), as text.
     pub sets: Vec<(String, String)>,
+    /// Material textures bound in every configuration, f32 and f64 (`--texture`, a scene's
+    /// `[textures]`, a Godot material's); samplers without one get their hint's default texel.
+    pub textures: Vec<(String, skyrun::TextureData)>,
 }
 
 impl Sky {
@@ -77,7 +80,14 @@ impl Sky {
     pub fn new(front: gdshader::FrontendOutput, sets: Vec<(String, String)>) -> Result<Sky, String> {
         let shader = front.shader.as_ref().ok_or("the shader has errors")?;
         let knobs = knobs::discover(shader);
-        Ok(Sky { front, knobs, sets })
+        Ok(Sky { front, knobs, sets, textures: Vec::new() })
+    }
+
+    /// The same sky with `textures` bound in every configuration.
+    #[must_use]
+    pub fn with_textures(mut self, textures: Vec<(String, skyrun::TextureData)>) -> Sky {
+        self.textures = textures;
+        self
     }
 
     /// Whether `name` is an int uniform (set in the material) or else taken as a const.
@@ -138,7 +148,7 @@ impl Sky {
             Some(4) => SkyResolution::Quarter,
             Some(v) => return Err(format!("{} is 1 (full), 2 (half) or 4 (quarter), not {v}", knobs::SKY_RESOLUTION)),
         };
-        Ok(Variant { front, sets, resolution })
+        Ok(Variant { front, sets, resolution, textures: self.textures.clone() })
     }
 }
 
@@ -159,6 +169,8 @@ pub struct Variant {
     /// The resolution its f32 renders shade the sky at ([`knobs::SKY_RESOLUTION`]); the f64
     /// evaluation is always full.
     pub resolution: SkyResolution,
+    /// The sky's material textures ([`Sky::textures`]).
+    pub textures: Vec<(String, skyrun::TextureData)>,
 }
 
 /// An f32 module compiled on a device, with its material block.
@@ -194,24 +206,30 @@ impl Variant {
         skyrun::material_with_defaults(shader, lowered, &sets).map_err(|e| e.to_string())
     }
 
-    /// Lowers, emits WGSL and compiles the f32 shader, with Godot's sub-passes and the
-    /// textures' hint defaults bound (no user textures: the sweeps measure the code).
+    /// Lowers, emits WGSL and compiles the f32 shader, with Godot's sub-passes, the textures'
+    /// hint defaults and the sky's own textures ([`Sky::textures`]) bound.
     pub fn compile(&self, gpu: &Gpu) -> Result<Compiled, String> {
         let diags = |d: Vec<gdshader::Diagnostic>| d.into_iter().map(|d| d.message).collect::<Vec<_>>().join("; ");
         let lowered = gdsky_naga::lower(&self.front).map_err(diags)?;
         let wgsl = gdsky_naga::to_wgsl(&lowered).map_err(|e| format!("{e:?}"))?;
         let shader = self.front.shader.as_ref().ok_or("the shader has errors")?;
-        let compiled = SkyShader::new(gpu, &wgsl, skyrun::SubPasses::of(&self.front))
+        let mut compiled = SkyShader::new(gpu, &wgsl, skyrun::SubPasses::of(&self.front))
             .map_err(|e| e.to_string())?
             .with_texture_defaults(skyrun::texture_defaults(shader, &lowered))
             .with_material_textures(gpu, gdsky_naga::reflect::texture_bindings(shader, &lowered));
+        for (name, data) in &self.textures {
+            compiled.set_texture(gpu, name, data).map_err(|e| format!("texture `{name}`: {e}"))?;
+        }
         let material = self.material(&lowered)?;
         Ok(Compiled { shader: compiled, resolution: self.resolution, lowered, material })
     }
 
     /// Compiles the f64 evaluation (`skyrun::F64Sky`).
     pub fn compile_f64(&self, gpu: &Gpu) -> Result<Compiled64, String> {
-        let sky = F64Sky::new(gpu, &self.front, &HashMap::new()).map_err(|e| e.to_string())?;
+        let mut sky = F64Sky::new(gpu, &self.front, &HashMap::new()).map_err(|e| e.to_string())?;
+        for (name, data) in &self.textures {
+            sky.set_texture(gpu, name, data).map_err(|e| format!("texture `{name}`: {e}"))?;
+        }
         let material = self.material(&sky.lowered)?;
         Ok(Compiled64 { sky, material })
     }

@@ -121,6 +121,7 @@ mod gpu;
 mod imageio;
 mod material;
 mod metrics;
+mod passthrough;
 mod render;
 pub mod safe_io;
 mod skip;

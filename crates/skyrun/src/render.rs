@@ -229,6 +229,10 @@ impl SkyShader {
     /// (`NoContraction`: the f64 evaluation's exact arithmetic, see
     /// `gdsky_naga::exact_arithmetic`). `entry_points` names the module's entry points.
     ///
+    /// Its `Binding` decorations are renumbered as wgpu's Vulkan back end numbers a layout's
+    /// entries (their rank in the group; see the `passthrough` module), since no one else
+    /// rewrites them on this path.
+    ///
     /// The binary must be valid SPIR-V whose interface matches `wgsl`'s: gdsky's f64 modules
     /// are naga-validated and re-read before they get here (`gdsky_naga::to_spirv`), and only
     /// gain decorations afterwards; `spirv-val` checks them in the tests. Errors: the device
@@ -252,6 +256,9 @@ impl SkyShader {
             .iter()
             .map(|name| wgpu::PassthroughShaderEntryPoint { name: name.clone().into(), workgroup_size: (0, 0, 0) })
             .collect();
+        let layout = bindings::discover(wgsl)?;
+        let spirv = crate::passthrough::vulkan_bindings(spirv, &layout)
+            .map_err(|message| RenderError::Wgpu { kind: "passthrough", message })?;
         Self::with_module(gpu, wgsl, sub_passes, || {
             // SAFETY: the binary is a naga-validated module written by naga's SPIR-V back end and
             // re-read by its front end (`gdsky_naga::to_spirv`), with `NoContraction` decorations
@@ -260,7 +267,7 @@ impl SkyShader {
             unsafe {
                 gpu.device.create_shader_module_passthrough(wgpu::ShaderModuleDescriptorPassthrough {
                     label: Some("sky (exact)"),
-                    spirv: Some(spirv.into()),
+                    spirv: Some(spirv.as_slice().into()),
                     entry_points: entry_points.into(),
                     ..Default::default()
                 })

@@ -62,7 +62,8 @@ pub struct F64Sky {
 
 impl F64Sky {
     /// Lowers `front` in f64 (with `baked` uniforms, as `lower_with` takes them) and compiles it.
-    /// Textures are the stand-ins [`SkyShader::render`] documents.
+    /// Material textures are their hints' default texels until [`F64Sky::set_texture`] gives
+    /// one; the other stand-ins are those [`SkyShader::render`] documents.
     pub fn new(
         gpu: &Gpu,
         front: &gdshader::FrontendOutput,
@@ -83,7 +84,28 @@ impl F64Sky {
         };
         let (nearest, lowered) = compile(gdsky_naga::F64Output::Nearest)?;
         let (residual, _) = compile(gdsky_naga::F64Output::Residual)?;
+        // The material textures as the f32 module binds them (the widening keeps every binding):
+        // the hints' default texels, and the names `set_texture` maps through.
+        let (nearest, residual) = match front.shader.as_ref() {
+            Some(shader) => {
+                let defaults = crate::texture_defaults(shader, &f32_module);
+                let textures = gdsky_naga::reflect::texture_bindings(shader, &f32_module);
+                (
+                    nearest.with_texture_defaults(defaults.clone()).with_material_textures(gpu, textures.clone()),
+                    residual.with_texture_defaults(defaults).with_material_textures(gpu, textures),
+                )
+            }
+            None => (nearest, residual),
+        };
         Ok(F64Sky { nearest, residual, lowered })
+    }
+
+    /// Binds `data` to the material texture `name` in both f64 modules, as
+    /// [`SkyShader::set_texture`] does (textures stay f32 at the boundary: their texels are
+    /// widened after the fetch).
+    pub fn set_texture(&mut self, gpu: &Gpu, name: &str, data: &crate::TextureData) -> Result<(), crate::TextureError> {
+        self.nearest.set_texture(gpu, name, data)?;
+        self.residual.set_texture(gpu, name, data)
     }
 
     /// Renders `width`×`height` pixels (full pass, as [`SkyShader::render`]) and returns each
