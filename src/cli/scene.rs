@@ -162,10 +162,39 @@ impl SceneArgs {
                 }
                 return Err(fail(message, 1));
             };
-            let data = skyrun::read_texture(&path, binding.srgb)
-                .map_err(|err| fail(format!("`{name}`: {err}"), if err.is_read() { 2 } else { 1 }))?;
+            // The uniform's sampler type says how PATH is read: one image, a cube map's faces
+            // (six files or one cross/grid image), a 3D texture's slices (files or one grid).
+            let base = scene.filter(|_| from_scene).and_then(|s| s.path.parent());
+            let read_fail =
+                |err: skyrun::TextureError| fail(format!("`{name}`: {err}"), if err.is_read() { 2 } else { 1 });
+            let data = match texture_shape(shader, &binding.uniform) {
+                skyrun::TextureShape::D2 => {
+                    let pieces = texture_files(&path, base);
+                    if pieces.len() > 1 {
+                        let message = format!(
+                            "`{name}` is a sampler2D and takes one image, but {} files were given ({}); six faces \
+                             make a cube map for a samplerCube, slices a 3D texture for a sampler3D",
+                            pieces.len(),
+                            path.display()
+                        );
+                        return Err(fail(message, 1));
+                    }
+                    skyrun::read_texture(&path, binding.srgb).map_err(read_fail)?
+                }
+                skyrun::TextureShape::Cube => {
+                    skyrun::read_cube(&texture_files(&path, base), binding.srgb).map_err(read_fail)?
+                }
+                skyrun::TextureShape::D3 => {
+                    let mut pieces = texture_files(&path, base);
+                    let grid = match pieces.as_mut_slice() {
+                        [single] => split_grid(single).map_err(|m| fail(format!("`{name}`: {m}"), 1))?,
+                        _ => None,
+                    };
+                    skyrun::read_volume(&pieces, grid, binding.srgb).map_err(read_fail)?
+                }
+            };
             if !declared.is_empty() {
-                skyrun::check_texture(&declared, &bindings, &name, data.format())
+                skyrun::check_texture(&declared, &bindings, &name, &data)
                     .map_err(|err| fail(format!("{}: {err}", path.display()), 1))?;
             }
             textures.push((name, data));
@@ -585,6 +614,67 @@ impl LoadedShader {
         }
         Ok(shader)
     }
+}
+
+/// The texture shape a sampler uniform takes: a cube map for `samplerCube`, a 3D texture for
+/// `sampler3D`, else one image (arrays and the rest are refused when bound).
+fn texture_shape(shader: &gdsky::CheckedShader, uniform: &str) -> skyrun::TextureShape {
+    use gdshader::check::types::{SamplerKind, Type};
+    let ty = shader.uniforms.iter().find(|u| u.name == uniform).map(|u| &u.ty);
+    let kind = match ty {
+        Some(Type::Sampler(kind, _)) => Some(*kind),
+        Some(Type::Array(element, _)) => match **element {
+            Type::Sampler(kind, _) => Some(kind),
+            _ => None,
+        },
+        _ => None,
+    };
+    match kind {
+        Some(SamplerKind::Cube) => skyrun::TextureShape::Cube,
+        Some(SamplerKind::Tex3D) => skyrun::TextureShape::D3,
+        _ => skyrun::TextureShape::D2,
+    }
+}
+
+/// The files of a texture value: the path itself when it names a file, else its
+/// comma-separated parts (`px.png,nx.png,…`), each after the first resolved against `base` (the
+/// scene file's folder, which the first part already carries) when the value came from a scene
+/// file.
+fn texture_files(path: &Path, base: Option<&Path>) -> Vec<PathBuf> {
+    let text = path.to_string_lossy();
+    if path.is_file() || !text.contains(',') {
+        return vec![path.to_path_buf()];
+    }
+    text.split(',')
+        .map(str::trim)
+        .enumerate()
+        .map(|(i, part)| match base {
+            Some(base) if i > 0 => base.join(part),
+            _ => PathBuf::from(part),
+        })
+        .collect()
+}
+
+/// Splits a `PATH@COLUMNSxROWS` grid suffix off a 3D texture's single image (unless the whole
+/// text names a file), leaving the path in `path`. `None`: no suffix (Godot's 8×8 grid).
+fn split_grid(path: &mut PathBuf) -> Result<Option<(u32, u32)>, String> {
+    let text = path.to_string_lossy().into_owned();
+    if path.is_file() {
+        return Ok(None);
+    }
+    let Some((file, grid)) = text.rsplit_once('@') else { return Ok(None) };
+    let parsed = grid
+        .split_once(['x', 'X'])
+        .and_then(|(c, r)| Some((c.trim().parse::<u32>().ok()?, r.trim().parse::<u32>().ok()?)))
+        .filter(|&(c, r)| (1..=256).contains(&c) && (1..=256).contains(&r));
+    let Some(grid) = parsed else {
+        return Err(format!(
+            "`{text}`: `@{grid}` is not a slice grid; write PATH@COLUMNSxROWS, each 1 to 256 (as Godot's \
+             slices/horizontal and slices/vertical)"
+        ));
+    };
+    *path = PathBuf::from(file);
+    Ok(Some(grid))
 }
 
 /// A scalar constant as a pipeline constant: wgpu takes every override's value as an f64 and

@@ -45,7 +45,9 @@
 //!   Rgba32Float, Rgba16Float, Rgba8Unorm, Rgba8UnormSrgb) to a sampler uniform by its name,
 //!   mapped to the bindings through the reflection ([`SkyShader::with_material_textures`]), with
 //!   samplers built from the uniforms' filter and repeat hints; [`read_texture`] reads OpenEXR
-//!   (f32) and PNG (8-bit, sRGB with `source_color`) files. A float texture the module only
+//!   (f32) and PNG (8-bit, sRGB with `source_color`) files, [`read_cube`] cube maps (six faces,
+//!   a cross or Godot's grids) and [`read_volume`] 3D textures (slices or a grid); a sampler
+//!   whose filter hint asks for mipmaps gets Godot's box-filtered chain ([`wants_mipmaps`]). A float texture the module only
 //!   loads from (`texelFetch`) is declared non-filterable, so 32-bit floats bind to it. Storage buffers, comparison samplers and binding
 //!   arrays are refused by name ([`bindings::BindingError`]).
 //! * [`material_with_defaults`] fills the material block of any shader from its own defaults
@@ -147,7 +149,8 @@ pub use render::{RenderError, Rendered, SkyShader, SubPasses, fragment_entry, re
 pub use skip::{MAX_MASK_BYTES, MaskError, OCCLUDED, Occluder, RenderOptions, SkyResolution, UpsampleFilter};
 pub use skyref::Projection;
 pub use textures::{
-    MAX_TEXTURE_FILE_BYTES, MAX_TEXTURE_SIDE, TexelFormat, TextureData, TextureError, check_texture, read_texture,
+    GODOT_VOLUME_GRID, MAX_TEXTURE_FILE_BYTES, MAX_TEXTURE_SIDE, MAX_VOLUME_SIDE, TexelFormat, TextureData,
+    TextureError, TextureShape, check_texture, read_cube, read_texture, read_volume, wants_mipmaps,
 };
 pub use wide::{F64Error, F64Sky, render_f64};
 

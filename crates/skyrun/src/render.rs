@@ -382,39 +382,19 @@ impl SkyShader {
     /// module does not declare (a uniform the shader never reads is pruned) is accepted and
     /// unused.
     ///
+    /// A uniform whose filter hint asks for mipmaps (`filter_*_mipmap*`, [`crate::wants_mipmaps`])
+    /// gets the full mip chain, Godot's box filter (textures/mipmap.rs); others one level.
+    ///
     /// Errors: those of [`crate::check_texture`] (an unknown name, a 32-bit float texture for a
-    /// texture the shader samples with filtering, a binding that is not a float 2D texture),
-    /// and wgpu refusing the texture.
+    /// texture the shader samples with filtering, a 2D image for a cube or 3D binding or the
+    /// like, an array or integer binding), and wgpu refusing the texture.
     pub fn set_texture(&mut self, gpu: &Gpu, name: &str, data: &crate::TextureData) -> Result<(), crate::TextureError> {
-        let Some(key) = crate::textures::check_texture(&self.bindings, &self.material_textures, name, data.format())?
-        else {
+        let Some(key) = crate::textures::check_texture(&self.bindings, &self.material_textures, name, data)? else {
             return Ok(());
         };
-        let size = wgpu::Extent3d { width: data.width(), height: data.height(), depth_or_array_layers: 1 };
-        let view = scoped(gpu, || {
-            let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
-                label: Some(name),
-                size,
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: data.format().wgpu(),
-                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-                view_formats: &[],
-            });
-            gpu.queue.write_texture(
-                texture.as_image_copy(),
-                data.bytes(),
-                wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(data.width() * data.format().bytes_per_texel()),
-                    rows_per_image: Some(data.height()),
-                },
-                size,
-            );
-            texture.create_view(&wgpu::TextureViewDescriptor::default())
-        })
-        .map_err(|e| crate::TextureError::Wgpu(e.to_string()))?;
+        let mipmaps = self.material_textures.iter().find(|t| t.name == name).is_some_and(crate::wants_mipmaps);
+        let view = scoped(gpu, || crate::textures::upload(gpu, name, data, mipmaps))
+            .map_err(|e| crate::TextureError::Wgpu(e.to_string()))?;
         self.provided.insert(key, view);
         Ok(())
     }

@@ -7,7 +7,15 @@
 //! filter and repeat hints), never by guessing at WGSL global names, which an emitter may
 //! rename. [`read_texture`] reads the files `gdsky render --texture NAME=PATH` names: OpenEXR
 //! as 32-bit floats, PNG as 8-bit unorm (sRGB-decoded by the GPU when the uniform has
-//! `source_color`).
+//! `source_color`); [`read_cube`] and [`read_volume`] assemble cube maps and 3D textures from
+//! several files or one image (textures/layout.rs), and a sampler whose filter hint asks for
+//! mipmaps gets a full chain (textures/mipmap.rs, Godot's box filter).
+
+mod layout;
+mod mipmap;
+
+pub use layout::{GODOT_VOLUME_GRID, read_cube, read_volume};
+pub use mipmap::wants_mipmaps;
 
 use crate::imageio::{Image, decode_exr};
 use std::fmt;
@@ -64,19 +72,66 @@ impl TexelFormat {
     }
 }
 
-/// A 2D texture's texels: `width × height` texels of `format`, row 0 first (the top of the
-/// image file), little-endian.
+/// Largest width, height or depth of a 3D texture: wgpu's default `max_texture_dimension_3d`.
+pub const MAX_VOLUME_SIDE: u32 = 2048;
+
+/// What a texture is, and so which sampler uniform it binds to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TextureShape {
+    /// One image (`sampler2D`).
+    D2,
+    /// Six square faces in the order +X, −X, +Y, −Y, +Z, −Z (`samplerCube`), each as Vulkan
+    /// (and Godot) orient a cube face: row 0 toward +Y for the side faces.
+    Cube,
+    /// Slices of equal size, front (w = 0) first (`sampler3D`).
+    D3,
+}
+
+impl TextureShape {
+    /// The Godot sampler type it binds to.
+    pub fn sampler_type(self) -> &'static str {
+        match self {
+            TextureShape::D2 => "sampler2D",
+            TextureShape::Cube => "samplerCube",
+            TextureShape::D3 => "sampler3D",
+        }
+    }
+
+    /// What it is, in words.
+    pub fn describe(self) -> &'static str {
+        match self {
+            TextureShape::D2 => "a 2D image",
+            TextureShape::Cube => "a cube map",
+            TextureShape::D3 => "a 3D texture",
+        }
+    }
+}
+
+/// A texture's texels: `layers` images (1 for 2D, 6 faces for a cube map, the slices of a 3D
+/// texture) of `width × height` texels of `format`, each row 0 first (the top of the image
+/// file), little-endian, layer after layer.
 #[derive(Clone, PartialEq)]
 pub struct TextureData {
     width: u32,
     height: u32,
+    layers: u32,
+    shape: TextureShape,
     format: TexelFormat,
     bytes: Vec<u8>,
 }
 
 impl fmt::Debug for TextureData {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "TextureData({}×{} {:?}, {} bytes)", self.width, self.height, self.format, self.bytes.len())
+        write!(
+            f,
+            "TextureData({:?} {}×{}×{} {:?}, {} bytes)",
+            self.shape,
+            self.width,
+            self.height,
+            self.layers,
+            self.format,
+            self.bytes.len()
+        )
     }
 }
 
@@ -91,7 +146,69 @@ impl TextureData {
         if bytes.len() as u64 != needed {
             return Err(TextureError::Data { width, height, format, given: bytes.len() });
         }
-        Ok(TextureData { width, height, format, bytes })
+        Ok(TextureData { width, height, layers: 1, shape: TextureShape::D2, format, bytes })
+    }
+
+    /// A cube map from its six faces in the order +X, −X, +Y, −Y, +Z, −Z: each a 2D texture,
+    /// square, all of one size and format.
+    pub fn cube(faces: &[TextureData]) -> Result<Self, TextureError> {
+        if faces.len() != 6 {
+            return Err(TextureError::Layout(format!("a cube map needs six faces, but {} were given", faces.len())));
+        }
+        let first = &faces[0];
+        if first.width != first.height {
+            return Err(TextureError::Layout(format!(
+                "cube map faces must be square, but they are {}×{}",
+                first.width, first.height
+            )));
+        }
+        Self::stack(faces, TextureShape::Cube, "cube map faces")
+    }
+
+    /// A 3D texture from its slices, front (w = 0) first: each a 2D texture, all of one size
+    /// and format, each side at most [`MAX_VOLUME_SIDE`].
+    pub fn volume(slices: &[TextureData]) -> Result<Self, TextureError> {
+        let Some(first) = slices.first() else {
+            return Err(TextureError::Layout("a 3D texture needs at least one slice".into()));
+        };
+        let depth = slices.len() as u64;
+        if first.width > MAX_VOLUME_SIDE || first.height > MAX_VOLUME_SIDE || depth > u64::from(MAX_VOLUME_SIDE) {
+            return Err(TextureError::Layout(format!(
+                "a {}×{}×{depth} 3D texture; each side must be at most {MAX_VOLUME_SIDE}",
+                first.width, first.height
+            )));
+        }
+        Self::stack(slices, TextureShape::D3, "3D texture slices")
+    }
+
+    /// Layers of one size and format stacked into one texture of `shape`.
+    fn stack(layers: &[TextureData], shape: TextureShape, what: &str) -> Result<Self, TextureError> {
+        let first = &layers[0];
+        for (i, l) in layers.iter().enumerate() {
+            if l.shape != TextureShape::D2 {
+                return Err(TextureError::Layout(format!("{what} must be 2D images; {i} is {}", l.shape.describe())));
+            }
+            if (l.width, l.height) != (first.width, first.height) {
+                return Err(TextureError::Layout(format!(
+                    "{what} must all have one size: 0 is {}×{}, {i} is {}×{}",
+                    first.width, first.height, l.width, l.height
+                )));
+            }
+            if l.format != first.format {
+                return Err(TextureError::Layout(format!(
+                    "{what} must all have one format: 0 is {:?}, {i} is {:?}",
+                    first.format, l.format
+                )));
+            }
+        }
+        Ok(TextureData {
+            width: first.width,
+            height: first.height,
+            layers: layers.len() as u32,
+            shape,
+            format: first.format,
+            bytes: layers.iter().flat_map(|l| l.bytes.iter().copied()).collect(),
+        })
     }
 
     /// An f32 RGBA image as an [`TexelFormat::Rgba32Float`] texture, bit for bit.
@@ -110,12 +227,32 @@ impl TextureData {
         self.height
     }
 
+    /// Layers: 1 for a 2D texture, 6 for a cube map, the depth of a 3D texture.
+    pub fn layers(&self) -> u32 {
+        self.layers
+    }
+
+    /// A 2D image, a cube map or a 3D texture.
+    pub fn shape(&self) -> TextureShape {
+        self.shape
+    }
+
     /// The texel format.
     pub fn format(&self) -> TexelFormat {
         self.format
     }
 
-    /// The texel bytes, row 0 first.
+    /// The same texels read as another format of the same size (8-bit unorm as sRGB, for a
+    /// `source_color` uniform).
+    pub fn with_format(mut self, format: TexelFormat) -> Result<Self, TextureError> {
+        if format.bytes_per_texel() != self.format.bytes_per_texel() {
+            return Err(TextureError::Layout(format!("{:?} texels cannot be read as {format:?}", self.format)));
+        }
+        self.format = format;
+        Ok(self)
+    }
+
+    /// The texel bytes, layer 0 first, row 0 first in each layer.
     pub fn bytes(&self) -> &[u8] {
         &self.bytes
     }
@@ -173,7 +310,21 @@ pub enum TextureError {
         /// The uniform.
         name: String,
     },
-    /// A texture the harness cannot take yet (3D, cube, array, integer).
+    /// Files that do not make the texture asked for: a wrong number of cube faces, faces or
+    /// slices of different sizes, an image whose aspect is no cube map layout (the message
+    /// names the files).
+    Layout(String),
+    /// A texture of one shape for a sampler uniform of another (a 2D image for a
+    /// `samplerCube`).
+    WrongShape {
+        /// The uniform.
+        name: String,
+        /// What the uniform's binding takes.
+        expected: TextureShape,
+        /// What was given.
+        given: TextureShape,
+    },
+    /// A texture the harness cannot take yet (arrays, integer textures).
     Unsupported {
         /// The uniform.
         name: String,
@@ -219,6 +370,14 @@ impl fmt::Display for TextureError {
                 "`{name}` is sampled with filtering (texture(), textureLod(), …), which a 32-bit float texture \
                  cannot be without an optional GPU feature: read it with texelFetch() in the shader, or give an \
                  8-bit (PNG) or 16-bit float texture"
+            ),
+            TextureError::Layout(message) => f.write_str(message),
+            TextureError::WrongShape { name, expected, given } => write!(
+                f,
+                "`{name}` is a {} and takes {}, but {} was given",
+                expected.sampler_type(),
+                expected.describe(),
+                given.describe()
             ),
             TextureError::Unsupported { name, what } => write!(f, "`{name}`: {what}"),
             TextureError::Wgpu(m) => write!(f, "creating the texture failed: {m}"),
@@ -299,7 +458,7 @@ pub fn read_texture(path: &Path, srgb: bool) -> Result<TextureData, TextureError
     Err(decode("neither an OpenEXR nor a PNG file (its first bytes are neither signature)".into()))
 }
 
-/// Checks that a texture of `format` can be given to the material texture `name` of a module
+/// Checks that `data` can be given to the material texture `name` of a module
 /// with `bindings` ([`crate::bindings::discover`]) and `textures` (the reflection's,
 /// [`gdsky_naga::reflect::texture_bindings`]), without a device: what
 /// [`crate::SkyShader::set_texture`] checks, for a host that wants to refuse a texture before it
@@ -309,13 +468,14 @@ pub fn read_texture(path: &Path, srgb: bool) -> Result<TextureData, TextureError
 /// Errors: a name that is not a material texture (the message lists the shader's);
 /// [`TexelFormat::Rgba32Float`] for a texture the shader samples with filtering (a texture it
 /// reads only with `texelFetch` is declared non-filterable, see [`crate::bindings::discover`]);
-/// a binding that is not a float 2D texture (3D, cube, array and integer textures cannot be
+/// a texture whose [`TextureShape`] is not the binding's (a 2D image for a `samplerCube`);
+/// a binding that is no float 2D, cube or 3D texture (arrays and integer textures cannot be
 /// given yet).
 pub fn check_texture(
     bindings: &[crate::bindings::Binding],
     textures: &[gdsky_naga::reflect::TextureBinding],
     name: &str,
-    format: TexelFormat,
+    data: &TextureData,
 ) -> Result<Option<(u32, u32)>, TextureError> {
     let Some(slot) = textures.iter().find(|t| t.name == name) else {
         return Err(TextureError::UnknownName {
@@ -331,32 +491,42 @@ pub fn check_texture(
     let crate::bindings::BindingKind::Texture { dimension, sample_type } = binding.kind else {
         return Err(unsupported("its binding is not a texture"));
     };
-    if dimension != wgpu::TextureViewDimension::D2 {
-        return Err(unsupported(&format!("a {dimension:?} texture; only 2D textures (sampler2D) can be given so far")));
+    let expected = match dimension {
+        wgpu::TextureViewDimension::D2 => TextureShape::D2,
+        wgpu::TextureViewDimension::Cube => TextureShape::Cube,
+        wgpu::TextureViewDimension::D3 => TextureShape::D3,
+        _ => {
+            return Err(unsupported(&format!(
+                "a {dimension:?} texture; only 2D, cube and 3D textures (sampler2D, samplerCube, sampler3D) can be \
+                 given so far"
+            )));
+        }
+    };
+    if data.shape() != expected {
+        return Err(TextureError::WrongShape { name: name.to_string(), expected, given: data.shape() });
     }
     let wgpu::TextureSampleType::Float { filterable } = sample_type else {
         return Err(unsupported(
             "an integer texture (isampler2D, usampler2D); only float textures can be given so far",
         ));
     };
-    if filterable && !format.filterable() {
+    if filterable && !data.format().filterable() {
         return Err(TextureError::NotFilterable { name: name.to_string() });
     }
     Ok(Some(key))
 }
 
 /// The sampler Godot's hints ask for (the reflection's `filter` and `repeat`): `nearest*`
-/// filters take the nearest texel, the others interpolate; `*_mipmap` picks the mipmap filter
-/// (material textures have one level, so it changes nothing); anisotropy is not applied;
-/// `repeat` wraps in u, v and w, otherwise clamps to the edge.
+/// filters take the nearest texel, the others interpolate; `*_mipmap*` filters blend the two
+/// nearest mip levels, nearest texel or not, as Godot does with its project setting
+/// `rendering/textures/default_filters/use_nearest_mipmap_filter` at its default (false);
+/// the other filters read one level (the texture has only one: mipmaps are generated only
+/// for a `*_mipmap*` hint, [`wants_mipmaps`]); anisotropy is not applied; `repeat` wraps in
+/// u, v and w, otherwise clamps to the edge.
 pub(crate) fn sampler(device: &wgpu::Device, filter: &str, repeat: bool) -> wgpu::Sampler {
     let nearest = filter.starts_with("nearest");
     let texel = if nearest { wgpu::FilterMode::Nearest } else { wgpu::FilterMode::Linear };
-    let mip = if filter.starts_with("nearest_mipmap") || filter == "nearest" {
-        wgpu::MipmapFilterMode::Nearest
-    } else {
-        wgpu::MipmapFilterMode::Linear
-    };
+    let mip = if filter.contains("mipmap") { wgpu::MipmapFilterMode::Linear } else { wgpu::MipmapFilterMode::Nearest };
     let address = if repeat { wgpu::AddressMode::Repeat } else { wgpu::AddressMode::ClampToEdge };
     device.create_sampler(&wgpu::SamplerDescriptor {
         label: Some("material sampler"),
@@ -368,6 +538,50 @@ pub(crate) fn sampler(device: &wgpu::Device, filter: &str, repeat: bool) -> wgpu
         mipmap_filter: mip,
         ..Default::default()
     })
+}
+
+/// Creates the GPU texture of `data` (a 2D texture, a six-layer 2D texture viewed as a cube, or
+/// a 3D texture) with its mip chain when `mipmaps` ([`mipmap::levels`]), and returns the view a
+/// material binding takes. Validation errors surface through the caller's error scope.
+pub(crate) fn upload(gpu: &crate::Gpu, label: &str, data: &TextureData, mipmaps: bool) -> wgpu::TextureView {
+    let levels = if mipmaps { mipmap::levels(data) } else { Vec::new() };
+    let (dimension, view) = match data.shape() {
+        TextureShape::D2 => (wgpu::TextureDimension::D2, wgpu::TextureViewDimension::D2),
+        TextureShape::Cube => (wgpu::TextureDimension::D2, wgpu::TextureViewDimension::Cube),
+        TextureShape::D3 => (wgpu::TextureDimension::D3, wgpu::TextureViewDimension::D3),
+    };
+    let size = wgpu::Extent3d { width: data.width(), height: data.height(), depth_or_array_layers: data.layers() };
+    let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size,
+        mip_level_count: 1 + levels.len() as u32,
+        sample_count: 1,
+        dimension,
+        format: data.format().wgpu(),
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    let bpt = data.format().bytes_per_texel();
+    let base = mipmap::Level { width: data.width(), height: data.height(), layers: data.layers(), bytes: Vec::new() };
+    for (mip_level, level) in std::iter::once(&base).chain(&levels).enumerate() {
+        let bytes = if mip_level == 0 { data.bytes() } else { &level.bytes };
+        gpu.queue.write_texture(
+            wgpu::TexelCopyTextureInfo {
+                texture: &texture,
+                mip_level: mip_level as u32,
+                origin: wgpu::Origin3d::ZERO,
+                aspect: wgpu::TextureAspect::All,
+            },
+            bytes,
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(level.width * bpt),
+                rows_per_image: Some(level.height),
+            },
+            wgpu::Extent3d { width: level.width, height: level.height, depth_or_array_layers: level.layers },
+        );
+    }
+    texture.create_view(&wgpu::TextureViewDescriptor { dimension: Some(view), ..Default::default() })
 }
 
 #[cfg(test)]
