@@ -371,6 +371,8 @@ pub struct SceneFile {
     pub animate: Option<Animation>,
     /// Textures generated for sampler uniforms (a Godot material's `NoiseTexture2D`s).
     pub generated_textures: Vec<crate::godot::GeneratedTexture>,
+    /// 3D textures generated for sampler uniforms (a Godot material's `NoiseTexture3D`s).
+    pub generated_volumes: Vec<crate::godot::GeneratedVolume>,
     db: SourceDb,
     file: FileId,
 }
@@ -793,6 +795,7 @@ impl SceneFile {
             sky_resolution: raw.sky_resolution,
             animate,
             generated_textures: Vec::new(),
+            generated_volumes: Vec::new(),
             db,
             file,
         })
@@ -829,6 +832,7 @@ impl SceneFile {
             sky_resolution: None,
             animate: None,
             generated_textures: settings.generated,
+            generated_volumes: settings.generated_volumes,
             db: material.db,
             file: material.file,
         }
@@ -931,7 +935,8 @@ impl SceneFile {
     pub fn texture_error(&self, name: &str, message: &str) -> String {
         let given = self.textures.iter().find(|t| t.name == name).map(|t| t.span.clone());
         let generated = || self.generated_textures.iter().find(|t| t.name == name).map(|t| t.span.clone());
-        let span = given.or_else(generated).unwrap_or(0..0);
+        let volume = || self.generated_volumes.iter().find(|t| t.name == name).map(|t| t.span.clone());
+        let span = given.or_else(generated).or_else(volume).unwrap_or(0..0);
         let d = Diagnostic::error(SCENE_VALUE, message.to_string()).with_primary(self.file, span, message.to_string());
         render_human(&self.db, &[d], false)
     }

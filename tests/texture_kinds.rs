@@ -276,3 +276,62 @@ fn wrong_cube_and_volume_inputs_are_clear_errors() {
     assert_eq!(o.status.code(), Some(1), "{}", text(&o));
     assert!(text(&o).contains("`plain` is a sampler2D and takes one image, but 6 files"), "{}", text(&o));
 }
+
+/// A Godot project in `dir` with `shader` as res://sky.gdshader and a material whose
+/// `shader_parameter/NAME` is a 4×4×4 NoiseTexture3D; returns the material's path.
+fn noise_volume_material(dir: &Path, shader: &str, name: &str) -> PathBuf {
+    std::fs::write(dir.join("project.godot"), "config_version=5\n").expect("writes");
+    std::fs::copy(shader, dir.join("sky.gdshader")).expect("copies the shader");
+    let material = dir.join("material.tres");
+    std::fs::write(
+        &material,
+        format!(
+            "[gd_resource type=\"ShaderMaterial\" load_steps=4 format=3]\n\n\
+             [ext_resource type=\"Shader\" path=\"res://sky.gdshader\" id=\"1_sky\"]\n\n\
+             [sub_resource type=\"FastNoiseLite\" id=\"N\"]\nseed = 5\nfrequency = 0.3\n\n\
+             [sub_resource type=\"NoiseTexture3D\" id=\"V\"]\nwidth = 4\nheight = 4\ndepth = 4\nnoise = SubResource(\"N\")\n\n\
+             [resource]\nshader = ExtResource(\"1_sky\")\nshader_parameter/{name} = SubResource(\"V\")\n"
+        ),
+    )
+    .expect("writes the material");
+    material
+}
+
+#[test]
+fn a_materials_noise_texture_3d_binds_to_its_sampler3d() {
+    let dir = scratch("texture_kinds", "noise3d");
+    let material = noise_volume_material(&dir, VOLUME_SHADER, "volume");
+    let out = dir.join("out.exr");
+    let o = gdsky(&["render", arg(&material), "--size", "4x1", "-o", arg(&out)]);
+    assert!(o.status.success(), "{}", text(&o));
+    let pixels = skyrun::read_exr(&out).expect("reads").pixels;
+    // What gdsky::noise generates for the same properties: slice k's texel (2, 2) at pixel k
+    // (the shader reads the centre, (0.5, 0.5), nearest).
+    let volume = gdsky::noise::NoiseTexture3D {
+        width: 4,
+        height: 4,
+        depth: 4,
+        noise: Some(gdsky::noise::FastNoiseLite { seed: 5, frequency: 0.3, ..Default::default() }),
+        ..Default::default()
+    };
+    let slices = volume.image().expect("generates");
+    let codes: Vec<u8> = slices.iter().map(|s| s.data[2 * 4 + 2]).collect();
+    assert!(codes.windows(2).any(|w| w[0] != w[1]), "the slices differ at the centre: {codes:?}");
+    for (k, code) in codes.iter().enumerate() {
+        let got = (pixels[k][0] * 255.0).round() as u8;
+        assert_eq!(got, *code, "slice {k}: {pixels:?}");
+    }
+
+    // The same NoiseTexture3D for a sampler2D: refused, naming the uniform, located in the
+    // material.
+    let dir = scratch("texture_kinds", "noise3d_wrong");
+    let material = noise_volume_material(&dir, MIP_SHADER, "plain");
+    let o = gdsky(&["render", arg(&material), "--size", "5x1", "-o", arg(&dir.join("out.exr"))]);
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    assert!(
+        text(&o).contains("NoiseTexture3D: `plain` is a sampler2D and takes a 2D image, but a 3D texture was given")
+            && text(&o).contains("material.tres:"),
+        "{}",
+        text(&o)
+    );
+}

@@ -123,11 +123,15 @@ impl SceneArgs {
             wanted.retain(|(n, _, _)| n != name.trim());
             wanted.push((name.trim().to_string(), PathBuf::from(path), false));
         }
-        // A Godot material's generated textures, unless a file is given for the same name.
-        let generated: Vec<&gdsky::godot::GeneratedTexture> = scene
+        // A Godot material's generated textures (NoiseTexture2D, NoiseTexture3D), unless a file
+        // is given for the same name.
+        let generated: Vec<(&str, Generated)> = scene
             .iter()
-            .flat_map(|s| &s.generated_textures)
-            .filter(|g| !wanted.iter().any(|(n, _, _)| *n == g.name))
+            .flat_map(|s| {
+                let planes = s.generated_textures.iter().map(|g| (g.name.as_str(), Generated::Plane(&g.texture)));
+                planes.chain(s.generated_volumes.iter().map(|g| (g.name.as_str(), Generated::Volume(&g.texture))))
+            })
+            .filter(|(name, _)| !wanted.iter().any(|(n, _, _)| n == name))
             .collect();
         if wanted.is_empty() && generated.is_empty() {
             return Ok(Vec::new());
@@ -199,31 +203,47 @@ impl SceneArgs {
             }
             textures.push((name, data));
         }
-        for g in generated {
+        for (name, g) in generated {
             let fail = |message: String| {
                 match scene {
-                    Some(scene) => eprint!("{}", scene.texture_error(&g.name, &message)),
+                    Some(scene) => eprint!("{}", scene.texture_error(name, &message)),
                     None => eprintln!("error: {message}"),
                 }
                 ExitCode::from(1)
             };
-            let Some(binding) = bindings.iter().find(|b| b.name == g.name) else {
-                return Err(fail(format!("the shader has no sampler uniform `{}` to bind a noise texture to", g.name)));
+            let Some(binding) = bindings.iter().find(|b| b.name == name) else {
+                return Err(fail(format!("the shader has no sampler uniform `{name}` to bind a noise texture to")));
             };
-            let data = g.texture.generate().map_err(|err| fail(format!("`{}`: {err}", g.name)))?;
+            let data = match g {
+                Generated::Plane(t) => t.generate().map_err(|err| fail(format!("`{name}`: {err}")))?,
+                Generated::Volume(t) => {
+                    let slices = t.image().map_err(|err| fail(format!("`{name}`: {err}")))?;
+                    slices
+                        .iter()
+                        .map(|s| {
+                            skyrun::TextureData::new(s.width, s.height, skyrun::TexelFormat::Rgba8Unorm, s.to_rgba8())
+                        })
+                        .collect::<Result<Vec<_>, _>>()
+                        .and_then(|s| skyrun::TextureData::volume(&s))
+                        .map_err(|err| fail(format!("`{name}`: {err}")))?
+                }
+            };
             // Godot's noise texels are sRGB-encoded colours to a `source_color` sampler.
             let data = if binding.srgb {
-                skyrun::TextureData::new(
-                    data.width(),
-                    data.height(),
-                    skyrun::TexelFormat::Rgba8UnormSrgb,
-                    data.bytes().to_vec(),
-                )
-                .map_err(|err| fail(format!("`{}`: {err}", g.name)))?
+                data.with_format(skyrun::TexelFormat::Rgba8UnormSrgb).map_err(|err| fail(format!("`{name}`: {err}")))?
             } else {
                 data
             };
-            textures.push((g.name.clone(), data));
+            // A NoiseTexture3D for a sampler2D and the like: refused before any GPU work.
+            if !declared.is_empty() {
+                let what = match g {
+                    Generated::Plane(_) => "NoiseTexture2D",
+                    Generated::Volume(_) => "NoiseTexture3D",
+                };
+                skyrun::check_texture(&declared, &bindings, name, &data)
+                    .map_err(|err| fail(format!("the material's {what}: {err}")))?;
+            }
+            textures.push((name.to_string(), data));
         }
         Ok(textures)
     }
@@ -614,6 +634,14 @@ impl LoadedShader {
         }
         Ok(shader)
     }
+}
+
+/// A texture a Godot material generates.
+enum Generated<'a> {
+    /// A `NoiseTexture2D`.
+    Plane(&'a gdsky::noise::NoiseTexture2D),
+    /// A `NoiseTexture3D`.
+    Volume(&'a gdsky::noise::NoiseTexture3D),
 }
 
 /// The texture shape a sampler uniform takes: a cube map for `samplerCube`, a 3D texture for

@@ -46,18 +46,21 @@ pub enum MaterialShader {
 pub enum TextureSource {
     /// An image file (PNG or OpenEXR), resolved.
     Image(PathBuf),
-    /// A `NoiseTexture2D` and the resources it refers to, generated when the texture is read.
+    /// A `NoiseTexture2D` or `NoiseTexture3D` and the resources it refers to, generated when
+    /// the texture is read.
     Noise(Box<NoiseSections>),
 }
 
-/// A `NoiseTexture2D` section and the sections of its `noise` (a `FastNoiseLite`) and
-/// `color_ramp` (a `Gradient`).
+/// A `NoiseTexture2D` (or `NoiseTexture3D`) section and the sections of its `noise` (a
+/// `FastNoiseLite`) and `color_ramp` (a `Gradient`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct NoiseSections {
     /// The file holding the sections.
     pub file: FileId,
-    /// The `NoiseTexture2D` section.
+    /// The `NoiseTexture2D` or `NoiseTexture3D` section.
     pub texture: Section,
+    /// Whether it is a `NoiseTexture3D` (for a `sampler3D`).
+    pub volume: bool,
     /// The `FastNoiseLite` section, when `noise` is set.
     pub noise: Option<Section>,
     /// The `Gradient` section, when `color_ramp` is set.
@@ -119,6 +122,17 @@ pub struct GeneratedTexture {
     pub span: Span,
 }
 
+/// A 3D texture the material generates: a `NoiseTexture3D` for a `sampler3D`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GeneratedVolume {
+    /// The sampler uniform.
+    pub name: String,
+    /// What to generate ([`crate::noise::NoiseTexture3D::image`], one image per slice).
+    pub texture: crate::noise::NoiseTexture3D,
+    /// Where the material file gives it.
+    pub span: Span,
+}
+
 /// The material's values as the command line gives them: `--set` texts, `--texture` paths and
 /// generated textures, each located in the material file.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -129,6 +143,8 @@ pub struct MaterialSettings {
     pub textures: Vec<TextureSetting>,
     /// Generated textures for sampler uniforms.
     pub generated: Vec<GeneratedTexture>,
+    /// Generated 3D textures for sampler uniforms.
+    pub generated_volumes: Vec<GeneratedVolume>,
     /// Warnings, rendered (parameters that name no uniform); empty when none.
     pub warnings: String,
 }
@@ -519,7 +535,7 @@ impl Loader {
         let ty = self.type_of(res);
         let (tfile, section) = (self.doc(res).file, self.section(res).clone());
         match ty.as_str() {
-            "NoiseTexture2D" => {
+            "NoiseTexture2D" | "NoiseTexture3D" => {
                 let mut linked = |name: &str, want: &str| -> Result<Option<Section>, Failure> {
                     let Some(entry) = section.property(name) else { return Ok(None) };
                     if matches!(entry.value.kind, ValueKind::Null) {
@@ -550,12 +566,21 @@ impl Loader {
                 };
                 let noise = linked("noise", "FastNoiseLite")?;
                 let color_ramp = linked("color_ramp", "Gradient")?;
-                Ok(TextureSource::Noise(Box::new(NoiseSections { file: tfile, texture: section, noise, color_ramp })))
+                let volume = ty == "NoiseTexture3D";
+                Ok(TextureSource::Noise(Box::new(NoiseSections {
+                    file: tfile,
+                    texture: section,
+                    volume,
+                    noise,
+                    color_ramp,
+                })))
             }
             other => Err(Failure::Invalid(
                 error(codes::BAD_TEXTURE, file, value.span.clone(), format!("gdsky cannot use a {other} as a texture"))
                     .with_secondary(tfile, section.span.clone(), "defined here")
-                    .with_note("textures gdsky reads: PNG and OpenEXR image files by path, and NoiseTexture2D"),
+                    .with_note(
+                        "textures gdsky reads: PNG and OpenEXR image files by path, NoiseTexture2D and NoiseTexture3D",
+                    ),
             )),
         }
     }
@@ -712,11 +737,16 @@ impl SkyMaterial {
 }
 
 /// Adds a texture to `out`: an image by path, or a noise texture mapped onto
-/// [`crate::noise::NoiseTexture2D`] (an error located at the property that does not fit).
+/// [`crate::noise::NoiseTexture2D`] or [`crate::noise::NoiseTexture3D`] (an error located at
+/// the property that does not fit).
 fn push_texture(out: &mut MaterialSettings, name: &str, source: &TextureSource, span: Span) -> Result<(), Diagnostic> {
     match source {
         TextureSource::Image(path) => {
             out.textures.push(TextureSetting { name: name.to_string(), path: path.clone(), span })
+        }
+        TextureSource::Noise(n) if n.volume => {
+            let texture = super::noise::noise_texture_3d(n.file, &n.texture, n.noise.as_ref(), n.color_ramp.as_ref())?;
+            out.generated_volumes.push(GeneratedVolume { name: name.to_string(), texture, span })
         }
         TextureSource::Noise(n) => {
             let texture = super::noise::noise_texture(n.file, &n.texture, n.noise.as_ref(), n.color_ramp.as_ref())?;

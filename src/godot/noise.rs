@@ -1,11 +1,11 @@
-//! A `NoiseTexture2D` section (with its `FastNoiseLite` and `Gradient`) mapped onto
-//! [`crate::noise::NoiseTexture2D`]: property by property, Godot's names, every value checked
+//! A `NoiseTexture2D` or `NoiseTexture3D` section (with its `FastNoiseLite` and `Gradient`)
+//! mapped onto [`crate::noise::NoiseTexture2D`] or [`crate::noise::NoiseTexture3D`]: property by property, Godot's names, every value checked
 //! for its kind where it is written. Properties gdsky does not use (`resource_name`, …) are
 //! skipped, as Godot's editor-only ones are.
 
 use super::codes;
 use super::text::{Entry, Section, Value, ValueKind};
-use crate::noise::{FastNoiseLite, Gradient, NoiseTexture2D};
+use crate::noise::{FastNoiseLite, Gradient, NoiseTexture2D, NoiseTexture3D};
 use gdshader::diag::{Diagnostic, FileId};
 
 /// A property's value of the wrong kind, located.
@@ -62,6 +62,32 @@ pub fn noise_texture(
             "seamless_blend_skirt" => t.seamless_blend_skirt = float(file, e)?,
             "as_normal_map" => t.as_normal_map = boolean(file, e)?,
             "bump_strength" => t.bump_strength = float(file, e)?,
+            "normalize" => t.normalize = boolean(file, e)?,
+            _ => {}
+        }
+    }
+    t.noise = noise.map(|s| fast_noise_lite(file, s)).transpose()?;
+    t.color_ramp = color_ramp.map(|s| gradient(file, s)).transpose()?;
+    Ok(t)
+}
+
+/// The `NoiseTexture3D` of `texture` (in `file`), its `noise` and `color_ramp` already
+/// followed to their sections.
+pub fn noise_texture_3d(
+    file: FileId,
+    texture: &Section,
+    noise: Option<&Section>,
+    color_ramp: Option<&Section>,
+) -> Result<NoiseTexture3D, Diagnostic> {
+    let mut t = NoiseTexture3D::default();
+    for e in &texture.properties {
+        match e.name.as_str() {
+            "width" => t.width = int(file, e)?,
+            "height" => t.height = int(file, e)?,
+            "depth" => t.depth = int(file, e)?,
+            "invert" => t.invert = boolean(file, e)?,
+            "seamless" => t.seamless = boolean(file, e)?,
+            "seamless_blend_skirt" => t.seamless_blend_skirt = float(file, e)?,
             "normalize" => t.normalize = boolean(file, e)?,
             _ => {}
         }
