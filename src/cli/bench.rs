@@ -827,7 +827,11 @@ pub fn convergence_table(c: &any::Converged) -> String {
             s.change.p99,
             s.change.max,
             s.f32_vs_f64,
-            if s.rejected { "  rejected: the f64 image left the f32 one or gained NaN/Inf" } else { "" }
+            match (s.rejected, s.loops_cut > c.start_loops_cut) {
+                (false, _) => String::new(),
+                (true, true) => format!("  rejected: the device cut loops short in {} pixels (lavapipe's loop budget)", s.loops_cut),
+                (true, false) => "  rejected: the f64 image left the f32 one or gained NaN/Inf".into(),
+            }
         ));
     }
     out
@@ -887,12 +891,21 @@ fn bench_any(
     bar.inc(1);
     let mut compiled = Vec::with_capacity(configs.len());
     let mut errors = Vec::with_capacity(configs.len());
+    // Configurations whose loops the device cut short (lavapipe's loop budget): their error is
+    // the device's, not the shader's; named after the table.
+    let mut cut = Vec::new();
     for values in &configs {
         bar.set_message(format!("{}: compile, warm-up render and error", any::label(&setting(values))));
-        let c = sky.variant(&setting(values)).and_then(|v| v.compile(&gpu)).map_err(usage)?;
+        let variant = sky.variant(&setting(values)).map_err(usage)?;
+        let c = variant.compile(&gpu).map_err(usage)?;
         let images: Vec<Vec<[f32; 4]>> =
             shots.iter().map(|s| c.render(&gpu, s).map(|r| r.0)).collect::<Result<_, _>>().map_err(usage)?;
         errors.push(any::pooled(&images, &truth.images));
+        let canary = variant.compile_canary(&gpu).map_err(usage)?;
+        let pixels: usize = shots.iter().map(|s| canary.loops_cut(&gpu, s)).sum::<Result<_, _>>().map_err(usage)?;
+        if pixels > 0 {
+            cut.push((any::label(&setting(values)), pixels));
+        }
         compiled.push(c);
         bar.inc(1);
     }
@@ -956,6 +969,13 @@ fn bench_any(
         truth_time,
         sweep::FLOOR
     );
+    if truth.start_loops_cut > 0 {
+        println!(
+            "warning  the device cut the loops of {} pixels at the default knobs (lavapipe's budget of 65,535 loop \
+             passes per pixel, docs/lavapipe-loop-limit.md): the truth there is the device's, not the shader's",
+            truth.start_loops_cut
+        );
+    }
     if raised.is_empty() {
         println!(
             "knobs    none (no int uniform with a hint_range or int const bounds a loop): the truth is the f64 evaluation alone"
@@ -981,6 +1001,12 @@ fn bench_any(
             d.errors.p99,
             d.errors.max,
             d.errors.mean_tonemapped
+        );
+    }
+    for (label, pixels) in &cut {
+        println!(
+            "cut      {label}: the device cut the loops of {pixels} pixels short (lavapipe's loop budget): its error is \
+             the device's, not the shader's"
         );
     }
     let title = format!("{name} on {}: {}x{} {}", adapter.name, width, height, projection_name(scene_args));

@@ -190,6 +190,33 @@ fn tune(args: &TuneArgs) -> Result<(), ExitCode> {
     };
     bar.inc(1);
 
+    // A configuration whose loops the device cuts short (lavapipe's budget of 65,535 loop
+    // passes per pixel) renders faster and differently than on any other GPU: it is not a
+    // candidate (the defaults stay, as the baseline, with a warning).
+    let mut kept = Vec::with_capacity(configs.len());
+    for values in configs {
+        let canary = sky.variant(&setting(&values)).and_then(|v| v.compile_canary(&gpu)).map_err(usage)?;
+        let pixels: usize = shots.iter().map(|s| canary.loops_cut(&gpu, s)).sum::<Result<_, _>>().map_err(usage)?;
+        if pixels == 0 || values == defaults {
+            if pixels > 0 {
+                bar.suspend(|| {
+                    println!(
+                        "warning: the device cuts the loops of {pixels} pixels short at the defaults (lavapipe's loop \
+                         budget, docs/lavapipe-loop-limit.md): their time and error are the device's"
+                    )
+                });
+            }
+            kept.push(values);
+        } else {
+            let label = any::label(&setting(&values));
+            bar.suspend(|| {
+                println!(
+                    "skipped: {label}: the device cuts the loops of {pixels} pixels short (lavapipe's loop budget)"
+                )
+            });
+        }
+    }
+    let configs = kept;
     let mut compiled = Vec::with_capacity(configs.len());
     let mut candidates = Vec::with_capacity(configs.len());
     for values in &configs {

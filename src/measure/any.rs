@@ -209,8 +209,20 @@ impl Variant {
     /// Lowers, emits WGSL and compiles the f32 shader, with Godot's sub-passes, the textures'
     /// hint defaults and the sky's own textures ([`Sky::textures`]) bound.
     pub fn compile(&self, gpu: &Gpu) -> Result<Compiled, String> {
-        let diags = |d: Vec<gdshader::Diagnostic>| d.into_iter().map(|d| d.message).collect::<Vec<_>>().join("; ");
-        let lowered = gdsky_naga::lower(&self.front).map_err(diags)?;
+        let lowered = gdsky_naga::lower(&self.front).map_err(diagnostics)?;
+        self.compile_lowered(gpu, lowered)
+    }
+
+    /// Compiles the loop-budget canary of this variant (`gdsky_naga::trace::loop_budget`): the
+    /// same colour, and as the alpha whether the device ran every loop; see
+    /// [`Compiled::loops_cut`].
+    pub fn compile_canary(&self, gpu: &Gpu) -> Result<Compiled, String> {
+        let lowered = gdsky_naga::lower(&self.front).map_err(diagnostics)?;
+        let canary = gdsky_naga::trace::loop_budget(&self.front, &lowered).map_err(diagnostics)?;
+        self.compile_lowered(gpu, canary)
+    }
+
+    fn compile_lowered(&self, gpu: &Gpu, lowered: gdsky_naga::Lowered) -> Result<Compiled, String> {
         let wgsl = gdsky_naga::to_wgsl(&lowered).map_err(|e| format!("{e:?}"))?;
         let shader = self.front.shader.as_ref().ok_or("the shader has errors")?;
         let mut compiled = SkyShader::new(gpu, &wgsl, skyrun::SubPasses::of(&self.front))
@@ -236,6 +248,14 @@ impl Variant {
 }
 
 impl Compiled {
+    /// For a module from [`Variant::compile_canary`]: how many pixels of `shot` the device did
+    /// not run every loop for (lavapipe's shared budget of 65,535 loop passes per invocation;
+    /// see `gdsky_naga::trace::loop_budget`). 0 on a device without such a limit.
+    pub fn loops_cut(&self, gpu: &Gpu, shot: &Shot) -> Result<usize, String> {
+        let (pixels, _) = self.render(gpu, shot)?;
+        Ok(pixels.iter().filter(|p| p[3] == gdsky_naga::trace::BUDGET_SPENT).count())
+    }
+
     /// Renders `shot` with `builtins` (normally `shot.builtins()`); the time is the passes' GPU
     /// time where the device has timestamps, else submit → idle.
     pub fn render_with(
@@ -275,6 +295,11 @@ impl Compiled {
     }
 }
 
+/// The messages of diagnostics, joined.
+fn diagnostics(d: Vec<gdshader::Diagnostic>) -> String {
+    d.into_iter().map(|d| d.message).collect::<Vec<_>>().join("; ")
+}
+
 impl Compiled64 {
     /// Renders `shot` in f64 with `builtins`.
     pub fn render_with(&self, gpu: &Gpu, shot: &Shot, builtins: &SkyBuiltins) -> Result<Vec<[f64; 4]>, String> {
@@ -311,22 +336,36 @@ pub fn render64_all(
     shots.iter().map(|s| c.render(gpu, s)).collect()
 }
 
-/// The f64 images of `shots` at `setting` and the mean error of the f32 images against them,
-/// each rendered at `supersample`² samples per pixel and box-filtered ([`Limits::supersample`]).
+/// What [`render_both`] measured of one setting.
+struct Both {
+    /// The f64 images of the shots.
+    images: Images64,
+    /// Mean relative error of the f32 images against them.
+    f32_vs_f64: f64,
+    /// Pixels (of the rendered, supersampled shots) whose loops the device cut short
+    /// ([`Compiled::loops_cut`]).
+    loops_cut: usize,
+}
+
+/// The f64 images of `shots` at `setting`, the mean error of the f32 images against them, and
+/// the pixels whose loops the device cut, each rendered at `supersample`² samples per pixel and
+/// box-filtered ([`Limits::supersample`]).
 fn render_both(
     gpu: &Gpu,
     sky: &Sky,
     setting: &[(String, i32)],
     shots: &[Shot],
     supersample: u32,
-) -> Result<(Images64, f64), String> {
+) -> Result<Both, String> {
     let v = sky.variant(setting)?;
-    let (c64, c32) = (v.compile_f64(gpu)?, v.compile(gpu)?);
+    let (c64, c32, canary) = (v.compile_f64(gpu)?, v.compile(gpu)?, v.compile_canary(gpu)?);
     let k = supersample.clamp(1, MAX_SUPERSAMPLE);
     let mut images = Vec::with_capacity(shots.len());
     let mut f32s = Vec::with_capacity(shots.len());
+    let mut loops_cut = 0;
     for shot in shots {
         let fine = shot.supersampled(k);
+        loops_cut += canary.loops_cut(gpu, &fine)?;
         let (f64_image, f32_image) = (c64.render(gpu, &fine)?, c32.render(gpu, &fine)?.0);
         if k == 1 {
             images.push(f64_image);
@@ -338,8 +377,8 @@ fn render_both(
             f32s.push(filtered.iter().map(|p| p.map(|c| c as f32)).collect());
         }
     }
-    let error = pooled(&f32s, &images).mean;
-    Ok((images, error))
+    let f32_vs_f64 = pooled(&f32s, &images).mean;
+    Ok(Both { images, f32_vs_f64, loops_cut })
 }
 
 /// How far the f32 render may move away from the f64 one, relative to where it started, before
@@ -380,8 +419,12 @@ pub struct Step {
     /// Mean relative error of the f32 render against the f64 render at the new values: the
     /// guard against an f64 evaluation that goes wrong (see [`converge`]).
     pub f32_vs_f64: f64,
-    /// Whether the step was rejected because the f64 image left the f32 one or gained NaN/Inf
-    /// (the truth stays at the values before it).
+    /// Pixels whose loops the device cut short at the new values (lavapipe's loop budget,
+    /// [`Compiled::loops_cut`]), over all shots.
+    pub loops_cut: usize,
+    /// Whether the step was rejected because the f64 image left the f32 one, gained NaN/Inf,
+    /// or the device cut loops in more pixels than at the start (the truth stays at the values
+    /// before it).
     pub rejected: bool,
 }
 
@@ -396,6 +439,9 @@ pub struct Converged {
     pub images: Vec<Vec<[f64; 4]>>,
     /// Whether every knob met the tolerance before reaching `max_value`.
     pub converged: bool,
+    /// Pixels whose loops the device cut short at the start (the default knobs): their truth
+    /// and their f32 renders are the device's, not the shader's.
+    pub start_loops_cut: usize,
 }
 
 /// The stopping rule of [`converge`].
@@ -458,8 +504,11 @@ pub fn box_filter<T: Copy + Into<f64>>(fine: &[[T; 4]], width: u32, height: u32,
 /// value would pass `limits.max_value`. Then doubles all of them at once as a check (the `all` step): the
 /// truth is the image after that check, at twice the values each knob needed alone. A step
 /// whose f64 image moves away from its own f32 render by more than [`F64_GUARD`]× the start's
-/// difference is rejected (recorded, not taken) and ends that knob's raising. The f64
-/// evaluation makes the truth also the precision truth: no f32 rounding in it.
+/// difference, that adds NaN/Inf, or whose loops the device cuts short in more pixels than at
+/// the start (lavapipe's shared budget of 65,535 loop passes per invocation, which would cut
+/// the f32 and the f64 image alike: docs/lavapipe-loop-limit.md) is rejected (recorded, not
+/// taken) and ends that knob's raising. The f64 evaluation makes the truth also the precision
+/// truth: no f32 rounding in it.
 pub fn converge(
     gpu: &Gpu,
     sky: &Sky,
@@ -470,7 +519,8 @@ pub fn converge(
     mut progress: impl FnMut(&str),
 ) -> Result<Converged, String> {
     let mut setting = start.clone();
-    let (mut images, baseline) = render_both(gpu, sky, &setting, shots, limits.supersample)?;
+    let first = render_both(gpu, sky, &setting, shots, limits.supersample)?;
+    let (mut images, baseline, start_loops_cut) = (first.images, first.f32_vs_f64, first.loops_cut);
     // Non-finite channels of the start: a step that adds any (an overflowing layer scale, a
     // division by a vanishing step) is rejected, since the statistics leave NaN out and a
     // truth full of them would look converged.
@@ -490,10 +540,12 @@ pub fn converge(
             progress(&format!("converging: {name} {from} → {to}"));
             let mut next = setting.clone();
             next[at].1 = to;
-            let (next_images, f32_vs_f64) = render_both(gpu, sky, &next, shots, limits.supersample)?;
+            let Both { images: next_images, f32_vs_f64, loops_cut } =
+                render_both(gpu, sky, &next, shots, limits.supersample)?;
             let change = pooled_f64(&images, &next_images);
-            let rejected = f32_vs_f64 > bound || nonfinite(&next_images) > start_nonfinite;
-            steps.push(Step { knob: name.clone(), from, to, change, f32_vs_f64, rejected });
+            let rejected =
+                f32_vs_f64 > bound || nonfinite(&next_images) > start_nonfinite || loops_cut > start_loops_cut;
+            steps.push(Step { knob: name.clone(), from, to, change, f32_vs_f64, loops_cut, rejected });
             if rejected {
                 converged = false;
                 break;
@@ -513,17 +565,19 @@ pub fn converge(
             .collect();
         if next != setting {
             progress("converging: all knobs doubled (check)");
-            let (next_images, f32_vs_f64) = render_both(gpu, sky, &next, shots, limits.supersample)?;
+            let Both { images: next_images, f32_vs_f64, loops_cut } =
+                render_both(gpu, sky, &next, shots, limits.supersample)?;
             let change = pooled_f64(&images, &next_images);
-            let rejected = f32_vs_f64 > bound || nonfinite(&next_images) > start_nonfinite;
+            let rejected =
+                f32_vs_f64 > bound || nonfinite(&next_images) > start_nonfinite || loops_cut > start_loops_cut;
             converged &= change.mean < limits.tolerance && !rejected;
-            steps.push(Step { knob: "all".into(), from: 0, to: 0, change, f32_vs_f64, rejected });
+            steps.push(Step { knob: "all".into(), from: 0, to: 0, change, f32_vs_f64, loops_cut, rejected });
             if !rejected {
                 (setting, images) = (next, next_images);
             }
         }
     }
-    Ok(Converged { setting, steps, images, converged })
+    Ok(Converged { setting, steps, images, converged, start_loops_cut })
 }
 
 /// RGB channels of `images` that are NaN or ±∞.

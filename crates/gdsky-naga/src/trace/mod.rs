@@ -56,6 +56,10 @@
 //! taken is reported although the shader never uses it. Expressions the lowering folded into
 //! constants are not run and are not sites.
 
+mod budget;
+
+pub use budget::{BUDGET_LEFT, BUDGET_SPENT, loop_budget};
+
 use crate::{Lowered, validation_diagnostic, validator_for};
 use gdshader::parse::ast;
 use gdshader::{Diagnostic, FrontendOutput};

@@ -23,20 +23,20 @@ pub(super) fn library() -> Result<&'static Module, String> {
 
 /// Grafts library functions into one module, each once, callees before callers (naga wants a
 /// function defined before any call to it).
-pub(super) struct Grafter<'l> {
+pub(crate) struct Grafter<'l> {
     lib: &'l Module,
     types: HashMap<Handle<Type>, Handle<Type>>,
     functions: HashMap<Handle<Function>, Handle<Function>>,
 }
 
 impl<'l> Grafter<'l> {
-    pub(super) fn new(lib: &'l Module) -> Self {
+    pub(crate) fn new(lib: &'l Module) -> Self {
         Grafter { lib, types: HashMap::new(), functions: HashMap::new() }
     }
 
     /// The handle in `target` of the library routine `name`, grafting it (and what it calls) on
     /// first use.
-    pub(super) fn routine(&mut self, target: &mut Module, name: &str) -> Result<Handle<Function>, String> {
+    pub(crate) fn routine(&mut self, target: &mut Module, name: &str) -> Result<Handle<Function>, String> {
         let found = self.lib.functions.iter().find(|(_, f)| f.name.as_deref() == Some(name)).map(|(h, _)| h);
         let h = found.ok_or_else(|| format!("the f64 library has no routine `{name}`"))?;
         // Math results typed by a predeclared struct (frexp's) name no type handle in the

@@ -45,7 +45,7 @@
 //! Not supported (an error naming the construct): overrides (`--override`), atomics, storage
 //! writes, image stores, subgroup and ray-query operations; none occur in sky shaders.
 
-mod graft;
+pub(crate) mod graft;
 
 pub use graft::F64_MATH_WGSL;
 
