@@ -335,3 +335,26 @@ fn a_materials_noise_texture_3d_binds_to_its_sampler3d() {
         text(&o)
     );
 }
+
+#[test]
+fn a_materials_cube_map_image_is_cut_as_godot_imports_it() {
+    // A material whose samplerCube refers to the PNG Godot imports as a Cubemap (its default
+    // 2×3 arrangement): gdsky reads the source image and cuts it the same way.
+    let dir = scratch("texture_kinds", "material_cube");
+    std::fs::write(dir.join("project.godot"), "config_version=5\n").expect("writes");
+    std::fs::copy(CUBE_SHADER, dir.join("sky.gdshader")).expect("copies the shader");
+    png(&dir.join("sky.png"), 6, 9, |x, y| cells(&[(0, 0), (1, 0), (0, 1), (1, 1), (0, 2), (1, 2)], x, y));
+    let material = dir.join("material.tres");
+    std::fs::write(
+        &material,
+        "[gd_resource type=\"ShaderMaterial\" load_steps=3 format=3]\n\n\
+         [ext_resource type=\"Shader\" path=\"res://sky.gdshader\" id=\"1_sky\"]\n\
+         [ext_resource type=\"CompressedCubemap\" path=\"res://sky.png\" id=\"2_cube\"]\n\n\
+         [resource]\nshader = ExtResource(\"1_sky\")\nshader_parameter/cube = ExtResource(\"2_cube\")\n",
+    )
+    .expect("writes the material");
+    let out = dir.join("out.exr");
+    let o = gdsky(&["render", arg(&material), "--size", "12x1", "-o", arg(&out)]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert_cube_faces(&skyrun::read_exr(&out).expect("reads").pixels, "material");
+}

@@ -17,8 +17,8 @@ pub struct RenderArgs {
     /// camera, projection, size, time; the flags given override it), or a Godot material
     /// (`MATERIAL.tres`: a ShaderMaterial, or a Sky or Environment leading to one) or scene
     /// (`SCENE.tscn`: its WorldEnvironment's sky), whose shader, `shader_parameter/*` values and
-    /// textures (PNG, OpenEXR, NoiseTexture2D) are used, `--set` and `--texture` overriding them
-    /// (docs/godot-materials.md); without one, the bundled Freeman sky.
+    /// textures (PNG, OpenEXR, NoiseTexture2D, NoiseTexture3D) are used, `--set` and `--texture`
+    /// overriding them (docs/godot-materials.md); without one, the bundled Freeman sky.
     #[arg(value_name = "MATERIAL.tres | SCENE.tscn | SCENE.toml | FILE")]
     file: Option<PathBuf>,
     /// Bake every uniform the scene file fixes (and every `--set`) into the shader as

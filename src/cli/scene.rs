@@ -72,7 +72,13 @@ pub struct SceneArgs {
     /// (element i of a sampler array: `NAME_i`). OpenEXR is read as 32-bit floats (bind it to a
     /// texture the shader reads with texelFetch; sampling needs a filterable format), PNG as
     /// 8-bit, sRGB-decoded when the uniform has `source_color`. Each side at most 8192.
-    /// Adds to a scene file's `[textures]` (a name given in both: this one). Repeatable.
+    /// A samplerCube takes six faces `px,nx,py,ny,pz,nz` (comma-separated, in that order: +X,
+    /// −X, +Y, −Y, +Z, −Z) or one image: a horizontal (4:3) or vertical (3:4) cross, or Godot's
+    /// 6x1, 3x2, 2x3 or 1x6 face grid, told by its aspect. A sampler3D takes slice files
+    /// front to back, or one image of slices in a grid read row by row, 8x8 (Godot's default)
+    /// or `PATH@COLUMNSxROWS`. A `filter_*_mipmap*` hint generates mipmaps (Godot's box
+    /// filter). Adds to a scene file's `[textures]` (a name given in both: this one).
+    /// Repeatable.
     #[arg(long = "texture", value_name = "NAME=PATH")]
     pub texture: Vec<String>,
 }
