@@ -358,3 +358,41 @@ fn a_materials_cube_map_image_is_cut_as_godot_imports_it() {
     assert!(o.status.success(), "{}", text(&o));
     assert_cube_faces(&skyrun::read_exr(&out).expect("reads").pixels, "material");
 }
+
+#[test]
+fn a_noise_texture_2d_brings_its_mipmaps_as_in_godot() {
+    // 8×4 noise under the default filter (linear_mipmap), read at its coarsest level: with
+    // `generate_mipmaps` (Godot's default) the 1×1 level Godot makes (NoiseImage::mipmaps);
+    // without, level 0 filtered bilinearly at (0.3, 0.6).
+    let noise = gdsky::noise::FastNoiseLite { seed: 11, frequency: 0.4, ..Default::default() };
+    let texture = gdsky::noise::NoiseTexture2D { width: 8, height: 4, noise: Some(noise), ..Default::default() };
+    let image = texture.image().expect("generates");
+    let coarsest = f32::from(image.mipmaps().last().expect("levels").data[0]) / 255.0;
+    let code = |x: usize, y: usize| f32::from(image.data[y * 8 + x]) / 255.0;
+    // Texel coordinates (1.9, 1.9): texels 1 and 2 in each direction, weights 0.1 and 0.9.
+    let level0 = 0.01 * code(1, 1) + 0.09 * code(2, 1) + 0.09 * code(1, 2) + 0.81 * code(2, 2);
+    assert!((coarsest - level0).abs() > 0.02, "the test tells the levels apart: {coarsest} vs {level0}");
+    for (generate, want) in [(true, coarsest), (false, level0)] {
+        let dir = scratch("texture_kinds", &format!("noise_mips_{generate}"));
+        std::fs::write(dir.join("project.godot"), "config_version=5\n").expect("writes");
+        std::fs::copy("tests/shaders/textures/noise_lod.gdshader", dir.join("sky.gdshader")).expect("copies");
+        let material = dir.join("material.tres");
+        std::fs::write(
+            &material,
+            format!(
+                "[gd_resource type=\"ShaderMaterial\" load_steps=4 format=3]\n\n\
+                 [ext_resource type=\"Shader\" path=\"res://sky.gdshader\" id=\"1_sky\"]\n\n\
+                 [sub_resource type=\"FastNoiseLite\" id=\"N\"]\nseed = 11\nfrequency = 0.4\n\n\
+                 [sub_resource type=\"NoiseTexture2D\" id=\"T\"]\nwidth = 8\nheight = 4\n\
+                 generate_mipmaps = {generate}\nnoise = SubResource(\"N\")\n\n\
+                 [resource]\nshader = ExtResource(\"1_sky\")\nshader_parameter/noise = SubResource(\"T\")\n"
+            ),
+        )
+        .expect("writes the material");
+        let out = dir.join("out.exr");
+        let o = gdsky(&["render", arg(&material), "--size", "2x1", "-o", arg(&out)]);
+        assert!(o.status.success(), "{}", text(&o));
+        let got = skyrun::read_exr(&out).expect("reads").pixels[0][0];
+        assert!((got - want).abs() < 2.0 / 255.0, "generate_mipmaps = {generate}: {got} vs {want}");
+    }
+}

@@ -221,7 +221,11 @@ impl SceneArgs {
                 return Err(fail(format!("the shader has no sampler uniform `{name}` to bind a noise texture to")));
             };
             let data = match g {
-                Generated::Plane(t) => t.generate().map_err(|err| fail(format!("`{name}`: {err}")))?,
+                // Godot gives a NoiseTexture2D mip levels when `generate_mipmaps` (its default)
+                // and samples them under a mipmap filter, hinted or Godot's default.
+                Generated::Plane(t) => {
+                    t.generate().map_err(|err| fail(format!("`{name}`: {err}")))?.with_mipmaps(t.generate_mipmaps)
+                }
                 Generated::Volume(t) => {
                     let slices = t.image().map_err(|err| fail(format!("`{name}`: {err}")))?;
                     slices
@@ -234,7 +238,8 @@ impl SceneArgs {
                         .map_err(|err| fail(format!("`{name}`: {err}")))?
                 }
             };
-            // Godot's noise texels are sRGB-encoded colours to a `source_color` sampler.
+            // Godot's noise texels are sRGB-encoded colours to a `source_color` sampler
+            // (`with_format` keeps the mipmap mark).
             let data = if binding.srgb {
                 data.with_format(skyrun::TexelFormat::Rgba8UnormSrgb).map_err(|err| fail(format!("`{name}`: {err}")))?
             } else {

@@ -383,7 +383,9 @@ impl SkyShader {
     /// unused.
     ///
     /// A uniform whose filter hint asks for mipmaps (`filter_*_mipmap*`, [`crate::wants_mipmaps`])
-    /// gets the full mip chain, Godot's box filter (textures/mipmap.rs); others one level.
+    /// gets the full mip chain, Godot's box filter (textures/mipmap.rs), and so does a texture
+    /// marked [`crate::TextureData::with_mipmaps`] under any mipmap filter (the default
+    /// `linear_mipmap` included); others one level.
     ///
     /// Errors: those of [`crate::check_texture`] (an unknown name, a 32-bit float texture for a
     /// texture the shader samples with filtering, a 2D image for a cube or 3D binding or the
@@ -392,7 +394,11 @@ impl SkyShader {
         let Some(key) = crate::textures::check_texture(&self.bindings, &self.material_textures, name, data)? else {
             return Ok(());
         };
-        let mipmaps = self.material_textures.iter().find(|t| t.name == name).is_some_and(crate::wants_mipmaps);
+        // A hint asks for mipmaps; a texture whose source has its own (a NoiseTexture2D) uses them
+        // under any mipmap filter, Godot's default one included.
+        let slot = self.material_textures.iter().find(|t| t.name == name);
+        let mipmaps =
+            slot.is_some_and(|t| crate::wants_mipmaps(t) || (data.mipmapped() && t.filter.contains("mipmap")));
         let view = scoped(gpu, || crate::textures::upload(gpu, name, data, mipmaps))
             .map_err(|e| crate::TextureError::Wgpu(e.to_string()))?;
         self.provided.insert(key, view);

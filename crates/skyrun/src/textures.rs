@@ -118,6 +118,8 @@ pub struct TextureData {
     shape: TextureShape,
     format: TexelFormat,
     bytes: Vec<u8>,
+    /// Whether the source has mip levels of its own ([`TextureData::with_mipmaps`]).
+    mipmapped: bool,
 }
 
 impl fmt::Debug for TextureData {
@@ -146,7 +148,7 @@ impl TextureData {
         if bytes.len() as u64 != needed {
             return Err(TextureError::Data { width, height, format, given: bytes.len() });
         }
-        Ok(TextureData { width, height, layers: 1, shape: TextureShape::D2, format, bytes })
+        Ok(TextureData { width, height, layers: 1, shape: TextureShape::D2, format, bytes, mipmapped: false })
     }
 
     /// A cube map from its six faces in the order +X, −X, +Y, −Y, +Z, −Z: each a 2D texture,
@@ -208,6 +210,7 @@ impl TextureData {
             shape,
             format: first.format,
             bytes: layers.iter().flat_map(|l| l.bytes.iter().copied()).collect(),
+            mipmapped: false,
         })
     }
 
@@ -250,6 +253,23 @@ impl TextureData {
         }
         self.format = format;
         Ok(self)
+    }
+
+    /// Marks the texture as one whose source has mip levels of its own: a Godot resource that
+    /// generates them (a `NoiseTexture2D` with `generate_mipmaps`, Godot's default). Godot then
+    /// samples them whenever the sampler's filter uses mipmaps, its default `linear_mipmap`
+    /// included, so [`crate::SkyShader::set_texture`] gives such a texture its chain for any
+    /// `*_mipmap*` filter, hinted or default; an unmarked texture only for a hint
+    /// ([`wants_mipmaps`]). The levels are made as Godot makes them (textures/mipmap.rs).
+    #[must_use]
+    pub fn with_mipmaps(mut self, mipmapped: bool) -> Self {
+        self.mipmapped = mipmapped;
+        self
+    }
+
+    /// Whether the source has mip levels of its own ([`TextureData::with_mipmaps`]).
+    pub fn mipmapped(&self) -> bool {
+        self.mipmapped
     }
 
     /// The texel bytes, layer 0 first, row 0 first in each layer.

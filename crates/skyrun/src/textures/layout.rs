@@ -169,7 +169,15 @@ fn region(image: &TextureData, x: u32, y: u32, w: u32, h: u32, turned: bool) -> 
             bytes.extend_from_slice(texels);
         }
     }
-    TextureData { width: w, height: h, layers: 1, shape: TextureShape::D2, format: image.format(), bytes }
+    TextureData {
+        width: w,
+        height: h,
+        layers: 1,
+        shape: TextureShape::D2,
+        format: image.format(),
+        bytes,
+        mipmapped: false,
+    }
 }
 
 /// Refuses layers of different sizes or formats, naming the first file and the odd one.
