@@ -396,3 +396,28 @@ fn a_noise_texture_2d_brings_its_mipmaps_as_in_godot() {
         assert!((got - want).abs() < 2.0 / 255.0, "generate_mipmaps = {generate}: {got} vs {want}");
     }
 }
+
+#[test]
+fn the_mip_levels_are_godots_for_noise_textures() {
+    // gdsky::noise::NoiseImage::mipmaps is compared byte for byte with Godot's own levels
+    // (tests/noise_oracle.rs); the levels skyrun binds must be the same bytes, for L8 noise
+    // (expanded to RGBA) and for a colour-ramped RGBA8 one, odd sides included.
+    let ramp = gdsky::noise::Gradient {
+        offsets: vec![0.0, 1.0],
+        colors: vec![[0.1, 0.2, 0.9, 1.0], [1.0, 0.8, 0.3, 0.5]],
+        ..Default::default()
+    };
+    for (width, height, color_ramp) in [(13, 7, None), (16, 5, Some(ramp))] {
+        let texture = gdsky::noise::NoiseTexture2D {
+            width,
+            height,
+            color_ramp,
+            noise: Some(gdsky::noise::FastNoiseLite { seed: 2, frequency: 0.2, ..Default::default() }),
+            ..Default::default()
+        };
+        let ours: Vec<Vec<u8>> =
+            texture.generate().expect("generates").mip_levels().iter().map(|l| l.bytes().to_vec()).collect();
+        let godots: Vec<Vec<u8>> = texture.image().expect("generates").mipmaps().iter().map(|l| l.to_rgba8()).collect();
+        assert_eq!(ours, godots, "{width}×{height}");
+    }
+}

@@ -272,6 +272,24 @@ impl TextureData {
         self.mipmapped
     }
 
+    /// The mip levels below level 0 that [`crate::SkyShader::set_texture`] binds when the
+    /// sampler asks for mipmaps, level 1 first, down to 1 × 1 (× 1 for a 3D texture): Godot's
+    /// box filter on the stored values (textures/mipmap.rs).
+    pub fn mip_levels(&self) -> Vec<TextureData> {
+        mipmap::levels(self)
+            .into_iter()
+            .map(|l| TextureData {
+                width: l.width,
+                height: l.height,
+                layers: l.layers,
+                shape: self.shape,
+                format: self.format,
+                bytes: l.bytes,
+                mipmapped: false,
+            })
+            .collect()
+    }
+
     /// The texel bytes, layer 0 first, row 0 first in each layer.
     pub fn bytes(&self) -> &[u8] {
         &self.bytes
