@@ -33,25 +33,6 @@ fn difference(a: &[[f32; 4]], b: &[[f32; 4]]) -> (f64, bool) {
     (worst, identical)
 }
 
-/// Runs `spirv-val --target-env vulkan1.1` on a module; a failure (or no spirv-val) fails.
-fn spirv_val(words: &[u32]) {
-    let path = std::env::temp_dir().join(format!("gdsky-specialize-{}.spv", std::process::id()));
-    let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
-    std::fs::write(&path, bytes).expect("temp file");
-    let out = std::process::Command::new("spirv-val")
-        .args(["--target-env", "vulkan1.1"])
-        .arg(&path)
-        .output()
-        .expect("spirv-val runs (Debian package spirv-tools)");
-    let _ = std::fs::remove_file(&path);
-    assert!(
-        out.status.success(),
-        "spirv-val: {}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-}
-
 #[test]
 fn baked_and_override_modules_render_as_the_generic_one() {
     let gpu = common::gpu();
@@ -92,7 +73,7 @@ fn baked_and_override_modules_render_as_the_generic_one() {
     // The same overrides as SPIR-V specialization constants: valid for Vulkan, read back by
     // naga as overrides with their ids and defaults, and rendered through wgpu's SPIR-V input.
     let over_spirv = gdsky_naga::to_spirv(&over_lowered).expect("SPIR-V with specialization constants");
-    spirv_val(&over_spirv);
+    common::spirv_val(&over_spirv);
     let bytes: Vec<u8> = over_spirv.iter().flat_map(|w| w.to_le_bytes()).collect();
     let reread = naga::front::spv::parse_u8_slice(&bytes, &naga::front::spv::Options::default()).expect("re-reads");
     let read: Vec<(Option<u16>, Option<naga::Literal>)> = reread

@@ -23,7 +23,7 @@ use crate::{Lowered, validation_diagnostic, validator_for};
 use gdshader::{Diagnostic, FrontendOutput};
 use naga::{
     AddressSpace, BinaryOperator as Bo, Block, Expression as E, Function, Handle, Literal, ScalarKind, ShaderStage,
-    Span, Statement, Type,
+    Span, Statement,
 };
 use std::sync::OnceLock;
 
@@ -88,72 +88,25 @@ fn passes_in_alpha(
     f: &mut Function,
     block: &mut Block,
     canary: Handle<Function>,
-    pass: (Handle<naga::GlobalVariable>, u32),
-) {
-    let old = std::mem::take(block);
-    for (mut stmt, span) in old.span_into_iter() {
-        match &mut stmt {
-            Statement::Block(b) => passes_in_alpha(f, b, canary, pass),
-            Statement::If { accept, reject, .. } => {
-                passes_in_alpha(f, accept, canary, pass);
-                passes_in_alpha(f, reject, canary, pass);
-            }
-            Statement::Switch { cases, .. } => {
-                for c in cases {
-                    passes_in_alpha(f, &mut c.body, canary, pass);
-                }
-            }
-            Statement::Loop { body, continuing, .. } => {
-                passes_in_alpha(f, body, canary, pass);
-                passes_in_alpha(f, continuing, canary, pass);
-            }
-            Statement::Return { value: Some(v) } => {
-                if let Some(ty) = f.result.as_ref().map(|r| r.ty) {
-                    *v = with_passes(f, block, *v, ty, canary, pass);
-                }
-            }
-            _ => {}
-        }
-        block.push(stmt, span);
-    }
-}
-
-/// Appends to `block` the canary's call and `vec4(out.rgb, passes or out.a)`; returns the
-/// latter.
-fn with_passes(
-    f: &mut Function,
-    block: &mut Block,
-    out: Handle<E>,
-    ty: Handle<Type>,
-    canary: Handle<Function>,
     (globals, member): (Handle<naga::GlobalVariable>, u32),
-) -> Handle<E> {
-    let sp = Span::UNDEFINED;
-    let ex = &mut f.expressions;
-    let g = ex.append(E::GlobalVariable(globals), sp);
-    let (half, quarter, never) = (
-        ex.append(E::Literal(Literal::U32(crate::wrapper::PASS_HALF)), sp),
-        ex.append(E::Literal(Literal::U32(crate::wrapper::PASS_QUARTER)), sp),
-        ex.append(E::Literal(Literal::U32(u32::MAX)), sp),
-    );
-    let (two, three) = (ex.append(E::Literal(Literal::U32(2)), sp), ex.append(E::Literal(Literal::U32(3)), sp));
-    let start = ex.len();
-    let field = ex.append(E::AccessIndex { base: g, index: member }, sp);
-    let value = ex.append(E::Load { pointer: field }, sp);
-    let impossible = ex.append(E::Binary { op: Bo::Equal, left: value, right: never }, sp);
-    let limit = ex.append(E::Select { condition: impossible, accept: three, reject: two }, sp);
-    block.push(Statement::Emit(ex.range_from(start)), sp);
-    let passes = ex.append(E::CallResult(canary), sp);
-    block.push(Statement::Call { function: canary, arguments: vec![limit], result: Some(passes) }, sp);
-    let start = ex.len();
-    let count = ex.append(E::As { expr: passes, kind: ScalarKind::Float, convert: Some(4) }, sp);
-    let alpha = ex.append(E::AccessIndex { base: out, index: 3 }, sp);
-    let is_half = ex.append(E::Binary { op: Bo::Equal, left: value, right: half }, sp);
-    let is_quarter = ex.append(E::Binary { op: Bo::Equal, left: value, right: quarter }, sp);
-    let sub = ex.append(E::Binary { op: Bo::LogicalOr, left: is_half, right: is_quarter }, sp);
-    let alpha = ex.append(E::Select { condition: sub, accept: alpha, reject: count }, sp);
-    let rgb: Vec<_> = (0..3).map(|index| ex.append(E::AccessIndex { base: out, index }, sp)).collect();
-    let composed = ex.append(E::Compose { ty, components: [rgb, vec![alpha]].concat() }, sp);
-    block.push(Statement::Emit(ex.range_from(start)), sp);
-    composed
+) {
+    super::rewrite_returns(f, block, &mut |f, block, out, ty| {
+        let sp = Span::UNDEFINED;
+        let ex = &mut f.expressions;
+        let refs = super::PassRefs::new(ex, (globals, member));
+        let never = ex.append(E::Literal(Literal::U32(u32::MAX)), sp);
+        let (two, three) = (ex.append(E::Literal(Literal::U32(2)), sp), ex.append(E::Literal(Literal::U32(3)), sp));
+        let start = ex.len();
+        let value = refs.render_pass(ex);
+        let impossible = ex.append(E::Binary { op: Bo::Equal, left: value, right: never }, sp);
+        let limit = ex.append(E::Select { condition: impossible, accept: three, reject: two }, sp);
+        block.push(Statement::Emit(ex.range_from(start)), sp);
+        let passes = ex.append(E::CallResult(canary), sp);
+        block.push(Statement::Call { function: canary, arguments: vec![limit], result: Some(passes) }, sp);
+        let start = ex.len();
+        let count = ex.append(E::As { expr: passes, kind: ScalarKind::Float, convert: Some(4) }, sp);
+        let composed = super::with_alpha(ex, out, ty, count, Some(refs));
+        block.push(Statement::Emit(ex.range_from(start)), sp);
+        composed
+    });
 }

@@ -388,6 +388,98 @@ impl Cx<'_> {
     }
 }
 
+/// What [`rewrite_returns`] calls for each `return v`: given the function, the block the
+/// return is in, `v` and the result type, it appends what it needs and gives the new value.
+pub(crate) type ReturnRewrite<'a> = dyn FnMut(&mut Function, &mut Block, Handle<E>, Handle<Type>) -> Handle<E> + 'a;
+
+/// Replaces the value of each `return v` in `block` (nested blocks included) by what `rewrite`
+/// appends to the block just before the return: how the instrumented modules put what they
+/// record into a fragment entry point's output.
+pub(crate) fn rewrite_returns(f: &mut Function, block: &mut Block, rewrite: &mut ReturnRewrite<'_>) {
+    let old = std::mem::take(block);
+    for (mut stmt, span) in old.span_into_iter() {
+        match &mut stmt {
+            Statement::Block(b) => rewrite_returns(f, b, rewrite),
+            Statement::If { accept, reject, .. } => {
+                rewrite_returns(f, accept, rewrite);
+                rewrite_returns(f, reject, rewrite);
+            }
+            Statement::Switch { cases, .. } => {
+                for c in cases {
+                    rewrite_returns(f, &mut c.body, rewrite);
+                }
+            }
+            Statement::Loop { body, continuing, .. } => {
+                rewrite_returns(f, body, rewrite);
+                rewrite_returns(f, continuing, rewrite);
+            }
+            Statement::Return { value: Some(v) } => {
+                if let Some(ty) = f.result.as_ref().map(|r| r.ty) {
+                    *v = rewrite(f, block, *v, ty);
+                }
+            }
+            _ => {}
+        }
+        block.push(stmt, span);
+    }
+}
+
+/// The expressions that tell the sub-passes from the full pass: the built-ins uniform, its
+/// `render_pass` member's index, and the half and quarter pass numbers. Made by [`PassRefs::new`]
+/// before an `Emit` range starts (globals and literals are never emitted).
+#[derive(Clone, Copy)]
+pub(crate) struct PassRefs {
+    globals: Handle<E>,
+    member: u32,
+    half: Handle<E>,
+    quarter: Handle<E>,
+}
+
+impl PassRefs {
+    /// Appends the uniform's and the literals' expressions to `ex`.
+    pub(crate) fn new(ex: &mut naga::Arena<E>, (globals, member): (Handle<GlobalVariable>, u32)) -> Self {
+        let sp = Span::UNDEFINED;
+        PassRefs {
+            globals: ex.append(E::GlobalVariable(globals), sp),
+            member,
+            half: ex.append(E::Literal(Literal::U32(crate::wrapper::PASS_HALF)), sp),
+            quarter: ex.append(E::Literal(Literal::U32(crate::wrapper::PASS_QUARTER)), sp),
+        }
+    }
+
+    /// The `render_pass` member's value (an expression to emit).
+    pub(crate) fn render_pass(&self, ex: &mut naga::Arena<E>) -> Handle<E> {
+        let field = ex.append(E::AccessIndex { base: self.globals, index: self.member }, Span::UNDEFINED);
+        ex.append(E::Load { pointer: field }, Span::UNDEFINED)
+    }
+}
+
+/// Appends to the expressions `vec4(out.rgb, a)` where `a` is `recorded` in the full pass and
+/// `out`'s own alpha in the sub-passes (without `pass`, `recorded` always). Every expression it
+/// appends is to be emitted: the caller emits the range.
+pub(crate) fn with_alpha(
+    ex: &mut naga::Arena<E>,
+    out: Handle<E>,
+    ty: Handle<Type>,
+    recorded: Handle<E>,
+    pass: Option<PassRefs>,
+) -> Handle<E> {
+    let sp = Span::UNDEFINED;
+    let alpha = ex.append(E::AccessIndex { base: out, index: 3 }, sp);
+    let alpha = match pass {
+        Some(p) => {
+            let value = p.render_pass(ex);
+            let is_half = ex.append(E::Binary { op: Bo::Equal, left: value, right: p.half }, sp);
+            let is_quarter = ex.append(E::Binary { op: Bo::Equal, left: value, right: p.quarter }, sp);
+            let sub = ex.append(E::Binary { op: Bo::LogicalOr, left: is_half, right: is_quarter }, sp);
+            ex.append(E::Select { condition: sub, accept: alpha, reject: recorded }, sp)
+        }
+        None => recorded,
+    };
+    let rgb: Vec<_> = (0..3).map(|index| ex.append(E::AccessIndex { base: out, index }, sp)).collect();
+    ex.append(E::Compose { ty, components: [rgb, vec![alpha]].concat() }, sp)
+}
+
 /// Makes each `return v` of a fragment entry point return `vec4(v.rgb, f32(site))`, except in
 /// the sub-passes (`pass`: the built-ins uniform and its `render_pass` member), which keep
 /// `v`'s alpha.
@@ -397,70 +489,18 @@ fn id_in_alpha(
     register: Handle<GlobalVariable>,
     pass: Option<(Handle<GlobalVariable>, u32)>,
 ) {
-    let old = std::mem::take(block);
-    for (mut stmt, span) in old.span_into_iter() {
-        match &mut stmt {
-            Statement::Block(b) => id_in_alpha(f, b, register, pass),
-            Statement::If { accept, reject, .. } => {
-                id_in_alpha(f, accept, register, pass);
-                id_in_alpha(f, reject, register, pass);
-            }
-            Statement::Switch { cases, .. } => {
-                for c in cases {
-                    id_in_alpha(f, &mut c.body, register, pass);
-                }
-            }
-            Statement::Loop { body, continuing, .. } => {
-                id_in_alpha(f, body, register, pass);
-                id_in_alpha(f, continuing, register, pass);
-            }
-            Statement::Return { value: Some(v) } => {
-                if let Some(ty) = f.result.as_ref().map(|r| r.ty) {
-                    *v = with_id(f, block, *v, ty, register, pass);
-                }
-            }
-            _ => {}
-        }
-        block.push(stmt, span);
-    }
-}
-
-/// Appends to `block` the expressions of `vec4(out.rgb, id or out.a)` and returns it.
-fn with_id(
-    f: &mut Function,
-    block: &mut Block,
-    out: Handle<E>,
-    ty: Handle<Type>,
-    register: Handle<GlobalVariable>,
-    pass: Option<(Handle<GlobalVariable>, u32)>,
-) -> Handle<E> {
-    let sp = Span::UNDEFINED;
-    let ex = &mut f.expressions;
-    let pointer = ex.append(E::GlobalVariable(register), sp);
-    let globals = pass.map(|(g, _)| ex.append(E::GlobalVariable(g), sp));
-    let (half, quarter) = (
-        ex.append(E::Literal(Literal::U32(crate::wrapper::PASS_HALF)), sp),
-        ex.append(E::Literal(Literal::U32(crate::wrapper::PASS_QUARTER)), sp),
-    );
-    let start = ex.len();
-    let site = ex.append(E::Load { pointer }, sp);
-    let id = ex.append(E::As { expr: site, kind: ScalarKind::Float, convert: Some(4) }, sp);
-    let alpha = ex.append(E::AccessIndex { base: out, index: 3 }, sp);
-    let alpha = match (globals, pass) {
-        (Some(g), Some((_, member))) => {
-            let field = ex.append(E::AccessIndex { base: g, index: member }, sp);
-            let value = ex.append(E::Load { pointer: field }, sp);
-            let is_half = ex.append(E::Binary { op: Bo::Equal, left: value, right: half }, sp);
-            let is_quarter = ex.append(E::Binary { op: Bo::Equal, left: value, right: quarter }, sp);
-            let sub = ex.append(E::Binary { op: Bo::LogicalOr, left: is_half, right: is_quarter }, sp);
-            ex.append(E::Select { condition: sub, accept: alpha, reject: id }, sp)
-        }
-        _ => id,
-    };
-    let rgb: Vec<_> = (0..3).map(|index| ex.append(E::AccessIndex { base: out, index }, sp)).collect();
-    let composed = ex.append(E::Compose { ty, components: [rgb, vec![alpha]].concat() }, sp);
-    block.push(Statement::Emit(ex.range_from(start)), sp);
-    composed
+    rewrite_returns(f, block, &mut |f, block, out, ty| {
+        let sp = Span::UNDEFINED;
+        let ex = &mut f.expressions;
+        let pointer = ex.append(E::GlobalVariable(register), sp);
+        let refs = pass.map(|p| PassRefs::new(ex, p));
+        let start = ex.len();
+        let site = ex.append(E::Load { pointer }, sp);
+        let id = ex.append(E::As { expr: site, kind: ScalarKind::Float, convert: Some(4) }, sp);
+        let composed = with_alpha(ex, out, ty, id, refs);
+        block.push(Statement::Emit(ex.range_from(start)), sp);
+        composed
+    });
 }
 
 #[cfg(test)]
