@@ -421,3 +421,25 @@ fn the_mip_levels_are_godots_for_noise_textures() {
         assert_eq!(ours, godots, "{width}×{height}");
     }
 }
+
+#[test]
+fn a_3d_images_godot_import_file_gives_its_grid() {
+    // volume.png.import says 4 slices across and 1 down (as Godot writes it for a Texture3D):
+    // without `@CxR` that grid is used, not the default 8×8 the 8×2 image cannot split into.
+    let dir = scratch("texture_kinds", "import_grid");
+    let colour = |k: u32| [30 + 50 * k as u8, 90, 200 - 40 * k as u8, 255];
+    let image = dir.join("volume.png");
+    png(&image, 8, 2, |x, _| colour(x / 2));
+    std::fs::write(
+        dir.join("volume.png.import"),
+        "[remap]\n\nimporter=\"3d_texture\"\ntype=\"CompressedTexture3D\"\n\n[params]\n\ncompress/mode=1\n\
+         mipmaps/generate=true\nslices/horizontal=4\nslices/vertical=1\n",
+    )
+    .expect("writes the import file");
+    let pixels = render(&dir, VOLUME_SHADER, 4, &[format!("volume={}", arg(&image))]);
+    for k in 0..4u32 {
+        let got: Vec<i32> = pixels[k as usize][..3].iter().map(|v| (v * 255.0).round() as i32).collect();
+        let want: Vec<i32> = colour(k)[..3].iter().map(|&c| i32::from(c)).collect();
+        assert_eq!(got, want, "slice {k}");
+    }
+}

@@ -75,8 +75,8 @@ pub struct SceneArgs {
     /// A samplerCube takes six faces `px,nx,py,ny,pz,nz` (comma-separated, in that order: +X,
     /// −X, +Y, −Y, +Z, −Z) or one image: a horizontal (4:3) or vertical (3:4) cross, or Godot's
     /// 6x1, 3x2, 2x3 or 1x6 face grid, told by its aspect. A sampler3D takes slice files
-    /// front to back, or one image of slices in a grid read row by row, 8x8 (Godot's default)
-    /// or `PATH@COLUMNSxROWS`. A `filter_*_mipmap*` hint generates mipmaps (Godot's box
+    /// front to back, or one image of slices in a grid read row by row: `PATH@COLUMNSxROWS`,
+    /// else the grid of its Godot import file (`PATH.import`), else 8x8 (Godot's default). A `filter_*_mipmap*` hint generates mipmaps (Godot's box
     /// filter). Adds to a scene file's `[textures]` (a name given in both: this one).
     /// Repeatable.
     #[arg(long = "texture", value_name = "NAME=PATH")]
@@ -197,7 +197,11 @@ impl SceneArgs {
                 skyrun::TextureShape::D3 => {
                     let mut pieces = texture_files(&path, base);
                     let grid = match pieces.as_mut_slice() {
-                        [single] => split_grid(single).map_err(|m| fail(format!("`{name}`: {m}"), 1))?,
+                        [single] => match split_grid(single).map_err(|m| fail(format!("`{name}`: {m}"), 1))? {
+                            // Without `@CxR`: the grid Godot's import settings give the image.
+                            None => import_grid(single),
+                            grid => grid,
+                        },
                         _ => None,
                     };
                     skyrun::read_volume(&pieces, grid, binding.srgb).map_err(read_fail)?
@@ -714,6 +718,28 @@ fn split_grid(path: &mut PathBuf) -> Result<Option<(u32, u32)>, String> {
     };
     *path = PathBuf::from(file);
     Ok(Some(grid))
+}
+
+/// The slice grid Godot's Texture3D import gives `image` (`slices/horizontal`,
+/// `slices/vertical` in the `[params]` of `image.import`, beside it), or `None` when there is
+/// no such file or it gives no grid (Godot's default 8×8 then applies). Read like every input:
+/// a regular file of at most 1 MiB; a file that cannot be read counts as absent.
+fn import_grid(image: &Path) -> Option<(u32, u32)> {
+    let mut name = image.as_os_str().to_owned();
+    name.push(".import");
+    let bytes = skyrun::safe_io::read_limited(Path::new(&name), 1 << 20).ok()?;
+    let text = String::from_utf8_lossy(&bytes);
+    let value = |key: &str| {
+        text.lines()
+            .filter_map(|l| l.split_once('='))
+            .find(|(k, _)| k.trim() == key)
+            .and_then(|(_, v)| v.trim().parse::<u32>().ok())
+            .filter(|v| (1..=256).contains(v))
+    };
+    match (value("slices/horizontal"), value("slices/vertical")) {
+        (None, None) => None,
+        (h, v) => Some((h.unwrap_or(8), v.unwrap_or(8))),
+    }
 }
 
 /// A scalar constant as a pipeline constant: wgpu takes every override's value as an f64 and
