@@ -443,3 +443,25 @@ fn a_3d_images_godot_import_file_gives_its_grid() {
         assert_eq!(got, want, "slice {k}");
     }
 }
+
+#[test]
+fn an_hdr_cube_map_from_half_exr_faces_is_sampled_as_stored() {
+    // Half-float EXR faces stay half floats (filterable, as Godot's RGBAH): a sampled
+    // samplerCube gets its HDR values exactly. (A 32-bit float EXR could only be read with
+    // texelFetch.)
+    let dir = scratch("texture_kinds", "hdr_cube");
+    let value = |face: usize| [10.0 * (face as f32 + 1.0), 0.5, 1234.0];
+    let faces: Vec<PathBuf> = (0..6)
+        .map(|face| {
+            let p = dir.join(format!("face{face}.exr"));
+            let [r, g, b] = value(face).map(exr::prelude::f16::from_f32);
+            exr::prelude::write_rgba_file(&p, 3, 3, |_, _| (r, g, b, exr::prelude::f16::ONE)).expect("writes");
+            p
+        })
+        .collect();
+    let list = faces.iter().map(|p| arg(p)).collect::<Vec<_>>().join(",");
+    let pixels = render(&dir, CUBE_SHADER, 12, &[format!("cube={list}")]);
+    for (face, pixel) in pixels.iter().take(6).enumerate() {
+        assert_eq!(pixel[..3], value(face), "face {face}");
+    }
+}

@@ -407,7 +407,7 @@ impl fmt::Display for TextureError {
                 f,
                 "`{name}` is sampled with filtering (texture(), textureLod(), …), which a 32-bit float texture \
                  cannot be without an optional GPU feature: read it with texelFetch() in the shader, or give an \
-                 8-bit (PNG) or 16-bit float texture"
+                 8-bit (PNG) or 16-bit float texture (an OpenEXR saved with half floats)"
             ),
             TextureError::Layout(message) => f.write_str(message),
             TextureError::WrongShape { name, expected, given } => write!(
@@ -434,9 +434,11 @@ impl std::error::Error for TextureError {
 
 /// Reads a texture file, recognised by its first bytes:
 ///
-/// * OpenEXR → [`TexelFormat::Rgba32Float`], every float as stored (half channels widened to
-///   f32; alpha 1 when absent; [`crate::read_exr`]'s rules). `srgb` does not apply: the data
-///   is already linear, as Godot treats float images.
+/// * OpenEXR → [`TexelFormat::Rgba32Float`], every float as stored (alpha 1 when absent;
+///   [`crate::read_exr`]'s rules); an image whose R, G, B (and A) channels are all half floats
+///   → [`TexelFormat::Rgba16Float`], bit for bit, as Godot's loader makes such a file an RGBAH
+///   image: filterable, so a sampled texture (an HDR cube map) can take it. `srgb` does not
+///   apply: the data is already linear, as Godot treats float images.
 /// * PNG → [`TexelFormat::Rgba8UnormSrgb`] when `srgb` (the uniform has `source_color`), else
 ///   [`TexelFormat::Rgba8Unorm`]. Grey is replicated to RGB, palettes and low bit depths are
 ///   expanded, 16-bit channels reduced to their high byte (as Godot imports them), alpha 255
@@ -455,6 +457,14 @@ pub fn read_texture(path: &Path, srgb: bool) -> Result<TextureData, TextureError
         // The header first: an oversized image is refused before its pixels are allocated.
         let meta = exr::meta::MetaData::read_from_buffered(Cursor::new(&bytes), false)
             .map_err(|e| decode(format!("not a readable OpenEXR file: {e}")))?;
+        let half = meta.headers.first().is_some_and(|header| {
+            let list = &header.channels.list;
+            ["R", "G", "B", "A"].iter().all(|name| {
+                list.iter()
+                    .find(|c| c.name.eq(name))
+                    .is_none_or(|c| c.sample_type == exr::meta::attribute::SampleType::F16)
+            })
+        });
         if let Some(header) = meta.headers.first() {
             let (w, h) = (header.layer_size.width(), header.layer_size.height());
             let (w, h) = (u32::try_from(w).unwrap_or(u32::MAX), u32::try_from(h).unwrap_or(u32::MAX));
@@ -463,6 +473,13 @@ pub fn read_texture(path: &Path, srgb: bool) -> Result<TextureData, TextureError
             }
         }
         let image = decode_exr(path, &bytes).map_err(|e| decode(e.to_string()))?;
+        if half {
+            // Every value came from a half, so narrowing it back is exact.
+            let bytes =
+                image.pixels.iter().flat_map(|p| p.iter().flat_map(|c| mipmap::f32_to_f16(*c).to_le_bytes())).collect();
+            return TextureData::new(image.width, image.height, TexelFormat::Rgba16Float, bytes)
+                .map_err(|_| size(image.width, image.height));
+        }
         return TextureData::from_image(&image).map_err(|_| size(image.width, image.height));
     }
     if bytes.starts_with(b"\x89PNG\r\n\x1a\n") {
@@ -655,6 +672,22 @@ mod tests {
         let t = read_texture(&png, true).expect("reads");
         assert_eq!((t.format(), t.bytes()), (TexelFormat::Rgba8UnormSrgb, &[128, 128, 128, 7][..]));
         assert_eq!(read_texture(&png, false).expect("reads").format(), TexelFormat::Rgba8Unorm);
+
+        // All-half channels stay half, bit for bit.
+        let half_path = dir.path().join("half.exr");
+        let halves = [0.1f32, 2.5, -3.0, 60000.0];
+        exr::prelude::write_rgba_file(&half_path, 2, 1, |x, _| {
+            let v = |i: usize| exr::prelude::f16::from_f32(halves[(i + x) % 4]);
+            (v(0), v(1), v(2), v(3))
+        })
+        .expect("writes a half EXR");
+        let t = read_texture(&half_path, false).expect("reads");
+        assert_eq!((t.width(), t.format()), (2, TexelFormat::Rgba16Float));
+        let expected: Vec<u8> = (0..2)
+            .flat_map(|x| (0..4).map(move |i| exr::prelude::f16::from_f32(halves[(i + x) % 4]).to_bits()))
+            .flat_map(u16::to_le_bytes)
+            .collect();
+        assert_eq!(t.bytes(), &expected[..]);
 
         let text = dir.path().join("t.txt");
         std::fs::write(&text, "hello").expect("writes");

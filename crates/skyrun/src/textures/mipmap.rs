@@ -119,7 +119,7 @@ fn f16_to_f32(h: u16) -> f32 {
 }
 
 /// f32 → IEEE binary16, rounded to nearest (ties to even), overflowing to infinity.
-fn f32_to_f16(v: f32) -> u16 {
+pub(super) fn f32_to_f16(v: f32) -> u16 {
     if v.is_nan() {
         return 0x7e00;
     }
