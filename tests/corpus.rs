@@ -22,7 +22,16 @@
 //! writes the table of results to `CARGO_TARGET_TMPDIR/corpus/results.md` (copied into
 //! `docs/corpus.md`).
 //!
-//! Without a Vulkan adapter or `spirv-val` the test fails with what is missing.
+//! A second ignored test, `corpus_matches_godot`, compares every corpus shader with real Godot
+//! 4.6 through the oracle the way tests/godot_parity.rs does (p99 ≤ 1 % of the channels per
+//! set-up; `--debanding godot` for `use_debanding` shaders; defaults and the sidecar's material
+//! values). A shader not held to that bound must be listed in [`PARITY_EXPECTED`] with its kind
+//! and a text of its outcome; a listed shader that passes fails the test. It prints
+//! `corpus parity: …` and writes `CARGO_TARGET_TMPDIR/corpus/parity.md` (docs/corpus.md).
+//! `GDSKY_CORPUS_ONLY=TEXT` compares only the shaders whose name contains TEXT.
+//!
+//! Without a Vulkan adapter, `spirv-val` or (for the parity test) the oracle, the tests fail
+//! with what is missing.
 
 use gdsky::frontend as gdshader;
 use gdsky::frontend::check::consteval::ConstValue;
