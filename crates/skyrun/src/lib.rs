@@ -149,8 +149,8 @@ pub use render::{RenderError, Rendered, SkyShader, SubPasses, fragment_entry, re
 pub use skip::{MAX_MASK_BYTES, MaskError, OCCLUDED, Occluder, RenderOptions, SkyResolution, UpsampleFilter};
 pub use skyref::Projection;
 pub use textures::{
-    GODOT_VOLUME_GRID, MAX_TEXTURE_FILE_BYTES, MAX_TEXTURE_SIDE, MAX_VOLUME_SIDE, TexelFormat, TextureData,
-    TextureError, TextureShape, check_texture, read_cube, read_texture, read_volume, wants_mipmaps,
+    GODOT_VOLUME_GRID, MAX_ASSEMBLED_BYTES, MAX_TEXTURE_FILE_BYTES, MAX_TEXTURE_SIDE, MAX_VOLUME_SIDE, TexelFormat,
+    TextureData, TextureError, TextureShape, check_texture, read_cube, read_texture, read_volume, wants_mipmaps,
 };
 pub use wide::{F64Error, F64Sky, render_f64};
 

@@ -14,7 +14,7 @@
 mod layout;
 mod mipmap;
 
-pub use layout::{GODOT_VOLUME_GRID, read_cube, read_volume};
+pub use layout::{GODOT_VOLUME_GRID, MAX_ASSEMBLED_BYTES, read_cube, read_volume};
 pub use mipmap::wants_mipmaps;
 
 use crate::imageio::{Image, decode_exr};

@@ -34,7 +34,8 @@ pub const GODOT_VOLUME_GRID: (u32, u32) = (8, 8);
 ///
 /// Errors: [`TextureError::Read`] for a file that cannot be read; [`TextureError::Layout`]
 /// naming the files for another number of files, faces that are not square or not all of one
-/// size and format, an image whose aspect is none of the layouts.
+/// size and format, an image whose aspect is none of the layouts, six files holding more than
+/// [`MAX_ASSEMBLED_BYTES`].
 pub fn read_cube(paths: &[PathBuf], srgb: bool) -> Result<TextureData, TextureError> {
     match paths {
         [path] => {
@@ -58,7 +59,7 @@ pub fn read_cube(paths: &[PathBuf], srgb: bool) -> Result<TextureData, TextureEr
             TextureData::cube(&faces).map_err(|e| in_file(path, e))
         }
         [_, _, _, _, _, _] => {
-            let faces = paths.iter().map(|p| read_texture(p, srgb)).collect::<Result<Vec<_>, _>>()?;
+            let faces = read_all(paths, srgb)?;
             let first = &faces[0];
             if first.width() != first.height() {
                 return Err(TextureError::Layout(format!(
@@ -85,7 +86,8 @@ pub fn read_cube(paths: &[PathBuf], srgb: bool) -> Result<TextureData, TextureEr
 ///
 /// Errors: [`TextureError::Read`] for a file that cannot be read; [`TextureError::Layout`]
 /// naming the files for slices not all of one size and format, an image whose sides are not
-/// multiples of the grid, a side over [`super::MAX_VOLUME_SIDE`].
+/// multiples of the grid, a side over [`super::MAX_VOLUME_SIDE`], slices holding more than
+/// [`MAX_ASSEMBLED_BYTES`].
 pub fn read_volume(paths: &[PathBuf], grid: Option<(u32, u32)>, srgb: bool) -> Result<TextureData, TextureError> {
     match paths {
         [] => Err(TextureError::Layout("a 3D texture needs at least one file".into())),
@@ -108,11 +110,37 @@ pub fn read_volume(paths: &[PathBuf], grid: Option<(u32, u32)>, srgb: bool) -> R
             TextureData::volume(&slices).map_err(|e| in_file(path, e))
         }
         _ => {
-            let slices = paths.iter().map(|p| read_texture(p, srgb)).collect::<Result<Vec<_>, _>>()?;
+            let slices = read_all(paths, srgb)?;
             same_size_and_format(&slices, paths, "3D texture slices")?;
             TextureData::volume(&slices).map_err(|e| TextureError::Layout(format!("{}: {e}", list(paths))))
         }
     }
+}
+
+/// Most texel bytes a cube map or 3D texture assembled from several files may hold: 2 GiB (six
+/// 4096² faces of 32-bit floats are 1.5 GiB, 128 slices of 2048² 8-bit texels 2 GiB). Files
+/// are read one by one and the total checked after each, so a stack of large slices is refused
+/// before it exhausts memory.
+pub const MAX_ASSEMBLED_BYTES: u64 = 2 << 30;
+
+/// Reads every file in order, refusing the set once its texels pass [`MAX_ASSEMBLED_BYTES`].
+fn read_all(paths: &[PathBuf], srgb: bool) -> Result<Vec<TextureData>, TextureError> {
+    let mut total = 0u64;
+    let mut layers = Vec::with_capacity(paths.len());
+    for path in paths {
+        let layer = read_texture(path, srgb)?;
+        total += layer.bytes().len() as u64;
+        if total > MAX_ASSEMBLED_BYTES {
+            return Err(TextureError::Layout(format!(
+                "{}: the {} files hold more than {} MiB of texels by this one, more than one texture may hold",
+                path.display(),
+                paths.len(),
+                MAX_ASSEMBLED_BYTES >> 20
+            )));
+        }
+        layers.push(layer);
+    }
+    Ok(layers)
 }
 
 /// One single-image cube layout: grid size in faces, and each face's cell (column, row,
