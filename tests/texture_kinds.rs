@@ -322,6 +322,12 @@ fn a_materials_noise_texture_3d_binds_to_its_sampler3d() {
         assert_eq!(got, *code, "slice {k}: {pixels:?}");
     }
 
+    // The oracle cannot give Godot a NoiseTexture3D: refused before Godot starts, rather than
+    // compared against a stand-in.
+    let o = gdsky(&["oracle", arg(&material), "-o", arg(&dir.join("godot.exr"))]);
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    assert!(text(&o).contains("`volume`: the oracle gives Godot NoiseTexture2Ds only"), "{}", text(&o));
+
     // The same NoiseTexture3D for a sampler2D: refused, naming the uniform, located in the
     // material.
     let dir = scratch("texture_kinds", "noise3d_wrong");

@@ -73,6 +73,13 @@ fn oracle(args: &OracleArgs) -> Result<(), ExitCode> {
             image.path.display()
         )));
     }
+    // Godot would get a stand-in for it, and the comparison would not be of the same sky.
+    if let Some(volume) = material.as_ref().and_then(|m| m.generated_volumes.first()) {
+        return Err(usage(format!(
+            "`{}`: the oracle gives Godot NoiseTexture2Ds only, not NoiseTexture3Ds",
+            volume.name
+        )));
+    }
     check_outputs(&args.out, args.png.as_ref())?;
 
     // gdsky checks the shader first: the uniform types for --set, and a clear diagnostic before
