@@ -770,7 +770,12 @@ fn set_text(value: &Value, ty: &Type) -> Result<String, String> {
         }
     };
     match ty {
-        Type::Scalar(Scalar::Float) => value.number().map(float).ok_or_else(found),
+        // Godot converts a bool to 0.0 or 1.0 for a float uniform (its Variant conversion), and
+        // writes files that way (`shader_parameter/precomputed_sun_visible = true`).
+        Type::Scalar(Scalar::Float) => match value.kind {
+            ValueKind::Bool(b) => Ok(float(f64::from(u8::from(b)))),
+            _ => value.number().map(float).ok_or_else(found),
+        },
         Type::Scalar(Scalar::Int | Scalar::UInt) => match value.kind {
             ValueKind::Int(i) => Ok(i.to_string()),
             ValueKind::Float(f) => int(f),

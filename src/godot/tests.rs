@@ -288,7 +288,8 @@ fn project(name: &str, files: &[(&str, &[u8])]) -> std::path::PathBuf {
 }
 
 const SKY: &[u8] = b"shader_type sky;\nuniform vec3 tint : source_color = vec3(1.0);\nuniform float gain = 1.0;\nuniform int steps = 4;\n\
-uniform bool on = false;\nuniform bvec3 mask;\nuniform sampler2D clouds;\nvoid sky() { COLOR = tint * gain * float(steps) * texture(clouds, SKY_COORDS).r; }\n";
+uniform bool on = false;\nuniform bvec3 mask;\nuniform sampler2D clouds;\nuniform float flag = 0.0;\n\
+void sky() { COLOR = tint * gain * flag * float(steps) * texture(clouds, SKY_COORDS).r; }\n";
 
 #[test]
 fn a_material_by_path_gives_its_shader_values_and_textures() {
@@ -304,7 +305,7 @@ fn a_material_by_path_gives_its_shader_values_and_textures() {
                   [ext_resource type=\"Texture2D\" path=\"../tex/clouds.png\" id=\"2_b\"]\n\n\
                   [resource]\nshader = ExtResource(\"1_a\")\nshader_parameter/tint = Color(1, 0.5, 0.25, 1)\n\
                   shader_parameter/gain = 2\nshader_parameter/steps = 8\nshader_parameter/on = true\nshader_parameter/mask = 5\n\
-                  shader_parameter/clouds = ExtResource(\"2_b\")\nshader_parameter/removed = 1.0\n",
+                  shader_parameter/clouds = ExtResource(\"2_b\")\nshader_parameter/removed = 1.0\nshader_parameter/flag = true\n",
             ),
         ],
     );
@@ -316,7 +317,15 @@ fn a_material_by_path_gives_its_shader_values_and_textures() {
     let pairs: Vec<(&str, &str)> = settings.uniforms.iter().map(|u| (u.name.as_str(), u.text.as_str())).collect();
     assert_eq!(
         pairs,
-        [("tint", "1.0,0.5,0.25"), ("gain", "2.0"), ("steps", "8"), ("on", "true"), ("mask", "true,false,true")]
+        [
+            ("tint", "1.0,0.5,0.25"),
+            ("gain", "2.0"),
+            ("steps", "8"),
+            ("on", "true"),
+            ("mask", "true,false,true"),
+            // A bool for a float uniform: Godot's conversion, as Godot writes such files.
+            ("flag", "1.0")
+        ]
     );
     assert_eq!(settings.textures.len(), 1);
     assert_eq!(settings.textures[0].path, dir.join("materials/../tex/clouds.png"));

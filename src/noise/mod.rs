@@ -36,10 +36,11 @@
 //! result texel for texel with the images real Godot 4.6 generates (through crates/skyoracle):
 //! every one of its 88 configurations is identical, byte for byte (docs/noise.md).
 //!
-//! Not bound: `generate_mipmaps` (on by default in Godot) adds mip levels, which
-//! [`NoiseImage::mipmaps`] makes as Godot does but [`skyrun::TextureData`] does not carry: a
-//! shader that samples with mipmaps sees level 0 at every distance. 3D textures
-//! ([`NoiseTexture3D::image`]) are generated, but skyrun cannot bind a 3D texture yet.
+//! Bound as Godot binds them: with `generate_mipmaps` (on by default in Godot) a NoiseTexture2D
+//! gets the mip levels [`NoiseImage::mipmaps`] makes as Godot does, sampled under any mipmap
+//! filter (`TextureData::with_mipmaps`); a NoiseTexture3D ([`NoiseTexture3D::image`]) is bound
+//! to a `sampler3D` (one level). A material's generated textures are read raw, also for a
+//! `source_color` sampler, as Godot 4.6's Compatibility renderer reads them (docs/corpus.md).
 //!
 //! ## How a shader sees it
 //!
@@ -156,7 +157,7 @@ pub struct NoiseTexture2D {
     pub invert: bool,
     /// Sample `get_noise_3d(x, y, 0)` instead of `get_noise_2d(x, y)`.
     pub in_3d_space: bool,
-    /// Godot adds mip levels; gdsky generates level 0 only (see the module documentation).
+    /// Godot adds mip levels ([`NoiseImage::mipmaps`]); gdsky binds them too.
     pub generate_mipmaps: bool,
     /// Make the image tile.
     pub seamless: bool,
@@ -195,7 +196,7 @@ impl Default for NoiseTexture2D {
     }
 }
 
-/// Godot's `NoiseTexture3D` resource (generation only: skyrun cannot bind a 3D texture yet).
+/// Godot's `NoiseTexture3D` resource (bound to a `sampler3D` with one level).
 #[derive(Clone, Debug, PartialEq)]
 pub struct NoiseTexture3D {
     /// Width in texels, 1 … [`MAX_SIDE`].
