@@ -176,3 +176,45 @@ fn quick_stress_lut_with_a_table_per_case() {
     assert!(text(&o).contains("reference: lut (skyref::fast (lut), the default for this file name)"), "{}", text(&o));
     assert!(s.horizon_p999 <= 1e-3, "freeman_lut, horizon p99.9 {:e} > 1e-3", s.horizon_p999);
 }
+
+/// `stress --texture NAME=PATH` binds a texture in every case: a shader that divides by its
+/// texel (black by its hint without one) has Inf at its defaults without the texture and none
+/// with it. A name that is no sampler, or a texture for a Freeman-compatible shader, is refused.
+#[test]
+fn a_texture_is_bound_in_every_stress_case() {
+    let dir = scratch("texture");
+    let file = dir.join("divided.gdshader");
+    std::fs::write(
+        &file,
+        "shader_type sky;\nuniform sampler2D tint : hint_default_black, filter_nearest;\n\
+         void sky() { COLOR = vec3(0.25) / texelFetch(tint, ivec2(0), 0).r; }\n",
+    )
+    .unwrap();
+    let texel = dir.join("half.exr");
+    let image = skyrun::Image { width: 1, height: 1, pixels: vec![[0.5, 0.5, 0.5, 1.0]] };
+    skyrun::write_exr(&texel, &image).expect("writes the texture");
+    let out = dir.join("out");
+    let run = |extra: &[&str]| {
+        let mut args = vec!["stress", "--quick", "-o", out.to_str().unwrap(), file.to_str().unwrap()];
+        args.extend_from_slice(extra);
+        gdsky(&args)
+    };
+    // Without it, the black stand-in: 0.25 / 0 is Inf, which stress reports and fails on.
+    let bare = run(&[]);
+    assert_eq!(bare.status.code(), Some(1), "{}", text(&bare));
+    assert!(!text(&bare).contains("inf_at_defaults=0 "), "{}", text(&bare));
+    let given = format!("tint={}", texel.display());
+    let bound = run(&["--texture", &given]);
+    assert!(bound.status.success(), "{}", text(&bound));
+    assert!(
+        text(&bound).contains("nan_at_defaults=0 inf_at_defaults=0 "),
+        "the texel 0.5 is bound in f32 and f64:\n{}",
+        text(&bound)
+    );
+    let wrong = run(&["--texture", &format!("nope={}", texel.display())]);
+    assert_eq!(wrong.status.code(), Some(1), "{}", text(&wrong));
+    assert!(text(&wrong).contains("nope"), "{}", text(&wrong));
+    let freeman = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/freeman_sky.gdshader");
+    let o = gdsky(&["stress", "--quick", "--texture", &given, "-o", out.to_str().unwrap(), freeman.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+}

@@ -119,145 +119,7 @@ impl SceneArgs {
         scene: Option<&SceneFile>,
         loaded: &LoadedShader,
     ) -> Result<Vec<(String, skyrun::TextureData)>, ExitCode> {
-        // (name, path, from the scene file)
-        let mut wanted: Vec<(String, PathBuf, bool)> =
-            scene.iter().flat_map(|s| &s.textures).map(|t| (t.name.clone(), t.path.clone(), true)).collect();
-        for t in &self.texture {
-            let Some((name, path)) = t.split_once('=').filter(|(n, p)| !n.trim().is_empty() && !p.is_empty()) else {
-                return Err(super::usage(format!("`--texture {t}`: expected NAME=PATH")));
-            };
-            wanted.retain(|(n, _, _)| n != name.trim());
-            wanted.push((name.trim().to_string(), PathBuf::from(path), false));
-        }
-        // A Godot material's generated textures (NoiseTexture2D, NoiseTexture3D), unless a file
-        // is given for the same name.
-        let generated: Vec<(&str, Generated)> = scene
-            .iter()
-            .flat_map(|s| {
-                let planes = s.generated_textures.iter().map(|g| (g.name.as_str(), Generated::Plane(&g.texture)));
-                planes.chain(s.generated_volumes.iter().map(|g| (g.name.as_str(), Generated::Volume(&g.texture))))
-            })
-            .filter(|(name, _)| !wanted.iter().any(|(n, _, _)| n == name))
-            .collect();
-        if wanted.is_empty() && generated.is_empty() {
-            return Ok(Vec::new());
-        }
-        let Some(shader) = loaded.front.shader.as_ref() else {
-            return Err(ExitCode::from(1));
-        };
-        let bindings = gdsky_naga::reflect::texture_bindings(shader, &loaded.lowered);
-        // The module's resources, to refuse a texture its binding cannot take before any GPU
-        // work (the same check `SkyShader::set_texture` makes); a module the harness cannot
-        // bind fails later with its own message.
-        let declared = skyrun::bindings::discover(&loaded.wgsl).unwrap_or_default();
-        let names = gdsky::scene::texture_names(shader);
-        let mut textures = Vec::with_capacity(wanted.len());
-        for (name, path, from_scene) in wanted {
-            let fail = |message: String, code: u8| {
-                match scene.filter(|_| from_scene) {
-                    Some(scene) => eprint!("{}", scene.texture_error(&name, &message)),
-                    None => eprintln!("error: {message}"),
-                }
-                ExitCode::from(code)
-            };
-            let Some(binding) = bindings.iter().find(|b| b.name == name) else {
-                // A sampler uniform the lowering did not give a material binding (a global
-                // sampler uniform) is as unknown as a typo.
-                let origin = if from_scene { format!("`textures.{name}`") } else { format!("`--texture {name}=…`") };
-                let mut message = format!("{origin}: the shader has no sampler uniform `{name}`");
-                match gdsky::scene::did_you_mean(&name, names.iter().map(String::as_str)) {
-                    Some(m) => message.push_str(&format!("; did you mean `{m}`?")),
-                    None if names.is_empty() => message.push_str(" (it has no sampler uniforms)"),
-                    None => message.push_str(&format!("; its sampler uniforms are: {}", names.join(", "))),
-                }
-                return Err(fail(message, 1));
-            };
-            // The uniform's sampler type says how PATH is read: one image, a cube map's faces
-            // (six files or one cross/grid image), a 3D texture's slices (files or one grid).
-            let base = scene.filter(|_| from_scene).and_then(|s| s.path.parent());
-            let read_fail =
-                |err: skyrun::TextureError| fail(format!("`{name}`: {err}"), if err.is_read() { 2 } else { 1 });
-            let data = match texture_shape(shader, &binding.uniform) {
-                skyrun::TextureShape::D2 => {
-                    let pieces = texture_files(&path, base);
-                    if pieces.len() > 1 {
-                        let message = format!(
-                            "`{name}` is a sampler2D and takes one image, but {} files were given ({}); six faces \
-                             make a cube map for a samplerCube, slices a 3D texture for a sampler3D",
-                            pieces.len(),
-                            path.display()
-                        );
-                        return Err(fail(message, 1));
-                    }
-                    skyrun::read_texture(&path, binding.srgb).map_err(read_fail)?
-                }
-                skyrun::TextureShape::Cube => {
-                    skyrun::read_cube(&texture_files(&path, base), binding.srgb).map_err(read_fail)?
-                }
-                skyrun::TextureShape::D3 => {
-                    let mut pieces = texture_files(&path, base);
-                    let grid = match pieces.as_mut_slice() {
-                        [single] => match split_grid(single).map_err(|m| fail(format!("`{name}`: {m}"), 1))? {
-                            // Without `@CxR`: the grid Godot's import settings give the image.
-                            None => import_grid(single),
-                            grid => grid,
-                        },
-                        _ => None,
-                    };
-                    skyrun::read_volume(&pieces, grid, binding.srgb).map_err(read_fail)?
-                }
-            };
-            if !declared.is_empty() {
-                skyrun::check_texture(&declared, &bindings, &name, &data)
-                    .map_err(|err| fail(format!("{}: {err}", path.display()), 1))?;
-            }
-            textures.push((name, data));
-        }
-        for (name, g) in generated {
-            let fail = |message: String| {
-                match scene {
-                    Some(scene) => eprint!("{}", scene.texture_error(name, &message)),
-                    None => eprintln!("error: {message}"),
-                }
-                ExitCode::from(1)
-            };
-            if !bindings.iter().any(|b| b.name == name) {
-                return Err(fail(format!("the shader has no sampler uniform `{name}` to bind a noise texture to")));
-            }
-            let data = match g {
-                // Godot gives a NoiseTexture2D mip levels when `generate_mipmaps` (its default)
-                // and samples them under a mipmap filter, hinted or Godot's default.
-                Generated::Plane(t) => {
-                    t.generate().map_err(|err| fail(format!("`{name}`: {err}")))?.with_mipmaps(t.generate_mipmaps)
-                }
-                Generated::Volume(t) => {
-                    let slices = t.image().map_err(|err| fail(format!("`{name}`: {err}")))?;
-                    slices
-                        .iter()
-                        .map(|s| {
-                            skyrun::TextureData::new(s.width, s.height, skyrun::TexelFormat::Rgba8Unorm, s.to_rgba8())
-                        })
-                        .collect::<Result<Vec<_>, _>>()
-                        .and_then(|s| skyrun::TextureData::volume(&s))
-                        .map_err(|err| fail(format!("`{name}`: {err}")))?
-                }
-            };
-            // Raw texels even for a `source_color` sampler: Godot 4.6's Compatibility renderer
-            // (the oracle's) reads a generated noise texture undecoded (measured on the corpus:
-            // decoding put shader_it's stars at p99 2.2 % from Godot, raw at 0.59 %;
-            // docs/corpus.md), as gdsky passes colour uniforms as Compatibility does.
-            // A NoiseTexture3D for a sampler2D and the like: refused before any GPU work.
-            if !declared.is_empty() {
-                let what = match g {
-                    Generated::Plane(_) => "NoiseTexture2D",
-                    Generated::Volume(_) => "NoiseTexture3D",
-                };
-                skyrun::check_texture(&declared, &bindings, name, &data)
-                    .map_err(|err| fail(format!("the material's {what}: {err}")))?;
-            }
-            textures.push((name.to_string(), data));
-        }
-        Ok(textures)
+        load_textures(&self.texture, scene, loaded)
     }
 
     /// Fills every scene flag not given on the command line from the scene file `file`; flags
@@ -1057,4 +919,150 @@ mod tests {
         assert_eq!(parse_size("8192x2048"), Ok((8192, 2048)));
         assert!(parse_size("8192x2049").is_err() && parse_size("0x4").is_err() && parse_size("16384x1").is_err());
     }
+}
+
+/// The textures for `loaded`'s sampler uniforms: `--texture NAME=PATH` flags (`flags`) over the
+/// scene file's `[textures]` and a Godot material's generated textures (what
+/// [`SceneArgs::textures`] gives; `stress`, which has no scene flags, calls it directly).
+pub fn load_textures(
+    flags: &[String],
+    scene: Option<&SceneFile>,
+    loaded: &LoadedShader,
+) -> Result<Vec<(String, skyrun::TextureData)>, ExitCode> {
+    // (name, path, from the scene file)
+    let mut wanted: Vec<(String, PathBuf, bool)> =
+        scene.iter().flat_map(|s| &s.textures).map(|t| (t.name.clone(), t.path.clone(), true)).collect();
+    for t in flags {
+        let Some((name, path)) = t.split_once('=').filter(|(n, p)| !n.trim().is_empty() && !p.is_empty()) else {
+            return Err(super::usage(format!("`--texture {t}`: expected NAME=PATH")));
+        };
+        wanted.retain(|(n, _, _)| n != name.trim());
+        wanted.push((name.trim().to_string(), PathBuf::from(path), false));
+    }
+    // A Godot material's generated textures (NoiseTexture2D, NoiseTexture3D), unless a file
+    // is given for the same name.
+    let generated: Vec<(&str, Generated)> = scene
+        .iter()
+        .flat_map(|s| {
+            let planes = s.generated_textures.iter().map(|g| (g.name.as_str(), Generated::Plane(&g.texture)));
+            planes.chain(s.generated_volumes.iter().map(|g| (g.name.as_str(), Generated::Volume(&g.texture))))
+        })
+        .filter(|(name, _)| !wanted.iter().any(|(n, _, _)| n == name))
+        .collect();
+    if wanted.is_empty() && generated.is_empty() {
+        return Ok(Vec::new());
+    }
+    let Some(shader) = loaded.front.shader.as_ref() else {
+        return Err(ExitCode::from(1));
+    };
+    let bindings = gdsky_naga::reflect::texture_bindings(shader, &loaded.lowered);
+    // The module's resources, to refuse a texture its binding cannot take before any GPU
+    // work (the same check `SkyShader::set_texture` makes); a module the harness cannot
+    // bind fails later with its own message.
+    let declared = skyrun::bindings::discover(&loaded.wgsl).unwrap_or_default();
+    let names = gdsky::scene::texture_names(shader);
+    let mut textures = Vec::with_capacity(wanted.len());
+    for (name, path, from_scene) in wanted {
+        let fail = |message: String, code: u8| {
+            match scene.filter(|_| from_scene) {
+                Some(scene) => eprint!("{}", scene.texture_error(&name, &message)),
+                None => eprintln!("error: {message}"),
+            }
+            ExitCode::from(code)
+        };
+        let Some(binding) = bindings.iter().find(|b| b.name == name) else {
+            // A sampler uniform the lowering did not give a material binding (a global
+            // sampler uniform) is as unknown as a typo.
+            let origin = if from_scene { format!("`textures.{name}`") } else { format!("`--texture {name}=…`") };
+            let mut message = format!("{origin}: the shader has no sampler uniform `{name}`");
+            match gdsky::scene::did_you_mean(&name, names.iter().map(String::as_str)) {
+                Some(m) => message.push_str(&format!("; did you mean `{m}`?")),
+                None if names.is_empty() => message.push_str(" (it has no sampler uniforms)"),
+                None => message.push_str(&format!("; its sampler uniforms are: {}", names.join(", "))),
+            }
+            return Err(fail(message, 1));
+        };
+        // The uniform's sampler type says how PATH is read: one image, a cube map's faces
+        // (six files or one cross/grid image), a 3D texture's slices (files or one grid).
+        let base = scene.filter(|_| from_scene).and_then(|s| s.path.parent());
+        let read_fail = |err: skyrun::TextureError| fail(format!("`{name}`: {err}"), if err.is_read() { 2 } else { 1 });
+        let data = match texture_shape(shader, &binding.uniform) {
+            skyrun::TextureShape::D2 => {
+                let pieces = texture_files(&path, base);
+                if pieces.len() > 1 {
+                    let message = format!(
+                        "`{name}` is a sampler2D and takes one image, but {} files were given ({}); six faces \
+                             make a cube map for a samplerCube, slices a 3D texture for a sampler3D",
+                        pieces.len(),
+                        path.display()
+                    );
+                    return Err(fail(message, 1));
+                }
+                skyrun::read_texture(&path, binding.srgb).map_err(read_fail)?
+            }
+            skyrun::TextureShape::Cube => {
+                skyrun::read_cube(&texture_files(&path, base), binding.srgb).map_err(read_fail)?
+            }
+            skyrun::TextureShape::D3 => {
+                let mut pieces = texture_files(&path, base);
+                let grid = match pieces.as_mut_slice() {
+                    [single] => match split_grid(single).map_err(|m| fail(format!("`{name}`: {m}"), 1))? {
+                        // Without `@CxR`: the grid Godot's import settings give the image.
+                        None => import_grid(single),
+                        grid => grid,
+                    },
+                    _ => None,
+                };
+                skyrun::read_volume(&pieces, grid, binding.srgb).map_err(read_fail)?
+            }
+        };
+        if !declared.is_empty() {
+            skyrun::check_texture(&declared, &bindings, &name, &data)
+                .map_err(|err| fail(format!("{}: {err}", path.display()), 1))?;
+        }
+        textures.push((name, data));
+    }
+    for (name, g) in generated {
+        let fail = |message: String| {
+            match scene {
+                Some(scene) => eprint!("{}", scene.texture_error(name, &message)),
+                None => eprintln!("error: {message}"),
+            }
+            ExitCode::from(1)
+        };
+        if !bindings.iter().any(|b| b.name == name) {
+            return Err(fail(format!("the shader has no sampler uniform `{name}` to bind a noise texture to")));
+        }
+        let data = match g {
+            // Godot gives a NoiseTexture2D mip levels when `generate_mipmaps` (its default)
+            // and samples them under a mipmap filter, hinted or Godot's default.
+            Generated::Plane(t) => {
+                t.generate().map_err(|err| fail(format!("`{name}`: {err}")))?.with_mipmaps(t.generate_mipmaps)
+            }
+            Generated::Volume(t) => {
+                let slices = t.image().map_err(|err| fail(format!("`{name}`: {err}")))?;
+                slices
+                    .iter()
+                    .map(|s| skyrun::TextureData::new(s.width, s.height, skyrun::TexelFormat::Rgba8Unorm, s.to_rgba8()))
+                    .collect::<Result<Vec<_>, _>>()
+                    .and_then(|s| skyrun::TextureData::volume(&s))
+                    .map_err(|err| fail(format!("`{name}`: {err}")))?
+            }
+        };
+        // Raw texels even for a `source_color` sampler: Godot 4.6's Compatibility renderer
+        // (the oracle's) reads a generated noise texture undecoded (measured on the corpus:
+        // decoding put shader_it's stars at p99 2.2 % from Godot, raw at 0.59 %;
+        // docs/corpus.md), as gdsky passes colour uniforms as Compatibility does.
+        // A NoiseTexture3D for a sampler2D and the like: refused before any GPU work.
+        if !declared.is_empty() {
+            let what = match g {
+                Generated::Plane(_) => "NoiseTexture2D",
+                Generated::Volume(_) => "NoiseTexture3D",
+            };
+            skyrun::check_texture(&declared, &bindings, name, &data)
+                .map_err(|err| fail(format!("the material's {what}: {err}")))?;
+        }
+        textures.push((name.to_string(), data));
+    }
+    Ok(textures)
 }

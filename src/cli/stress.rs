@@ -62,6 +62,12 @@ pub struct StressArgs {
     /// algorithm [default: `fast` when FILE's stem starts with `freeman_fast`, else `original`].
     #[arg(long, value_enum)]
     reference: Option<Reference>,
+    /// For a shader that is not Freeman-compatible: a texture for a sampler uniform, as on
+    /// `render` (`NAME=PATH`: EXR or PNG; six faces or a cross for a samplerCube, slices for a
+    /// sampler3D), bound in every case, f32 and f64; over a scene file's `[textures]` and a Godot
+    /// material's. Repeatable.
+    #[arg(long = "texture", value_name = "NAME=PATH")]
+    textures: Vec<String>,
 }
 
 /// A family of CPU references: skyref's Rust twin of a shader's algorithm, in f32 and f64.
@@ -190,7 +196,15 @@ fn stress(args: &StressArgs) -> Result<ExitCode, ExitCode> {
             )));
         }
         let sets = input.scene.as_ref().map(|f| f.uniform_pairs()).unwrap_or_default();
-        return stress_any(args, file, front, sets);
+        let loaded = super::scene::load_shader(Some(file))?;
+        let textures = super::scene::load_textures(&args.textures, input.scene.as_ref(), &loaded)?;
+        return stress_any(args, file, front, sets, textures);
+    }
+    if !args.textures.is_empty() {
+        return Err(usage(
+            "--texture applies to shaders that are not Freeman-compatible; a Freeman-compatible shader's tables \
+             (freeman_lut's transmittance_table) are baked per case automatically",
+        ));
     }
     let loaded = sweep::load_freeman(input.shader.as_deref())?;
     super::scene::check_scene_uniforms(input.scene.as_ref(), &loaded)?;
@@ -370,9 +384,10 @@ fn stress_any(
     file: &Path,
     front: gdsky::FrontendOutput,
     sets: Vec<(String, String)>,
+    textures: Vec<(String, skyrun::TextureData)>,
 ) -> Result<ExitCode, ExitCode> {
     let name = file.display().to_string();
-    let sky = any::Sky::new(front, sets).map_err(usage)?;
+    let sky = any::Sky::new(front, sets).map_err(usage)?.with_textures(textures);
     let shader_info = sky.front.shader.as_ref().ok_or(ExitCode::from(1))?;
     let (pano, cam) = if args.quick { ((64, 32), (32, 32)) } else { ((256, 128), (128, 128)) };
     let cases = any::stress_cases(shader_info, args.quick, pano, cam);
