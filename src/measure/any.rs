@@ -499,9 +499,9 @@ pub fn box_filter<T: Copy + Into<f64>>(fine: &[[T; 4]], width: u32, height: u32,
         .collect()
 }
 
-/// Raises each of `names` (doubling, one knob at a time, from `start`) until doubling it
-/// changes the f64 images of `shots` by a mean relative error below `limits.tolerance`, or its
-/// value would pass `limits.max_value`. Then doubles all of them at once as a check (the `all` step): the
+/// Raises each of `names` (doubling, from `start`; the knobs in turn, one doubling each per
+/// round) until doubling it changes the f64 images of `shots` by a mean relative error below
+/// `limits.tolerance`, or its value would pass `limits.max_value`. Then doubles all of them at once as a check (the `all` step): the
 /// truth is the image after that check, at twice the values each knob needed alone. A step
 /// whose f64 image moves away from its own f32 render by more than [`F64_GUARD`]× the start's
 /// difference, that adds NaN/Inf, or whose loops the device cuts short in more pixels than at
@@ -528,14 +528,19 @@ pub fn converge(
     let bound = F64_GUARD * baseline + 1e-4;
     let mut steps = Vec::new();
     let mut converged = true;
-    for name in names {
-        let Some(at) = setting.iter().position(|(n, _)| n == name) else { continue };
-        for doubling in 0.. {
+    // The knobs are raised in turn, one doubling each per round, so that none takes a shared
+    // budget before the others had theirs: lavapipe's 65,535 loop passes per pixel, which a
+    // view loop raised to 1024 alone would spend before its light loop could double once.
+    let mut raising: Vec<(usize, &String, u32)> =
+        names.iter().filter_map(|name| setting.iter().position(|(n, _)| n == name).map(|at| (at, name, 0))).collect();
+    while !raising.is_empty() {
+        let mut still = Vec::with_capacity(raising.len());
+        for (at, name, doublings) in raising {
             let from = setting[at].1;
             let to = from.max(1).saturating_mul(2);
-            if to > limits.max_value || doubling >= limits.max_doublings {
+            if to > limits.max_value || doublings >= limits.max_doublings {
                 converged = false;
-                break;
+                continue;
             }
             progress(&format!("converging: {name} {from} → {to}"));
             let mut next = setting.clone();
@@ -548,13 +553,14 @@ pub fn converge(
             steps.push(Step { knob: name.clone(), from, to, change, f32_vs_f64, loops_cut, rejected });
             if rejected {
                 converged = false;
-                break;
+                continue;
             }
             (setting, images) = (next, next_images);
-            if change.mean < limits.tolerance && change.nan + change.inf == 0 {
-                break;
+            if !(change.mean < limits.tolerance && change.nan + change.inf == 0) {
+                still.push((at, name, doublings + 1));
             }
         }
+        raising = still;
     }
     if !names.is_empty() {
         let next: Setting = setting
