@@ -218,3 +218,35 @@ fn a_texture_is_bound_in_every_stress_case() {
     let o = gdsky(&["stress", "--quick", "--texture", &given, "-o", out.to_str().unwrap(), freeman.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(1), "{}", text(&o));
 }
+
+/// NaN and Inf are traced to their source line automatically in `stress`: a square root that
+/// goes negative at one end of a uniform's hint range is named at its line, with its pixels, in
+/// stress.md, and its pixels are marked in a PNG.
+#[test]
+fn stress_traces_nan_to_its_line() {
+    let dir = scratch("trace");
+    let file = dir.join("root.gdshader");
+    std::fs::write(
+        &file,
+        "shader_type sky;\nuniform float k : hint_range(0.0, 2.0) = 1.0;\n\
+         float lift(float x) {\n\treturn sqrt(x - 0.5);\n}\n\
+         void sky() { COLOR = vec3(lift(k)) * (EYEDIR.y + 1.5); }\n",
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let o = gdsky(&["stress", "--quick", "-o", out.to_str().unwrap(), file.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", text(&o));
+    let md = std::fs::read_to_string(out.join("stress.md")).expect("stress.md");
+    assert!(md.contains("## Where NaN and Inf start"), "{md}");
+    let line =
+        md.lines().find(|l| l.contains("root.gdshader:4:")).unwrap_or_else(|| panic!("no place at line 4:\n{md}"));
+    assert!(line.contains("sqrt") && line.contains("pixels"), "{line}");
+    // The case at k = 0 has it in every pixel; the default (k = 1) is NaN-free and not listed.
+    assert!(md.contains("**k = 0.0**"), "{md}");
+    let pngs: Vec<_> = std::fs::read_dir(&out)
+        .expect("out dir")
+        .filter_map(|e| e.ok().map(|e| e.file_name().to_string_lossy().into_owned()))
+        .filter(|n| n.starts_with("nonfinite-") && n.ends_with(".png"))
+        .collect();
+    assert!(!pngs.is_empty(), "a nonfinite PNG is written");
+}

@@ -179,7 +179,11 @@ fn trace_nonfinite(
         views.push(r.pixels);
     }
     let ids = strip(views, inputs.width, inputs.height).map_err(|e| failed(&e))?;
-    let report = NonfiniteReport::new(&traced, &ids.pixels);
+    let report = gdsky_naga::trace::NonfiniteReport::new(&traced, &ids.pixels);
+    if report.unknown > 0 {
+        // Only the instrumented module writes the alpha; anything else is a harness bug.
+        eprintln!("warning: {} pixel(s) carry no site id (alpha neither 0 nor an id)", report.unknown);
+    }
     print!("{}", report.text());
     if report.places.is_empty() {
         return Ok(());
@@ -188,7 +192,11 @@ fn trace_nonfinite(
     let overlay: Vec<Option<[u8; 3]>> = ids
         .pixels
         .iter()
-        .map(|p| report.place_of(&traced, p[3]).map(|i| PLACE_COLOURS[i.min(PLACE_COLOURS.len() - 1)].1))
+        .map(|p| {
+            report
+                .place_of(&traced, p[3])
+                .map(|i| gdsky_naga::trace::PLACE_COLOURS[i.min(gdsky_naga::trace::PLACE_COLOURS.len() - 1)].1)
+        })
         .collect();
     skyrun::write_overlay_png(&png, image, &overlay).map_err(|e| {
         eprintln!("error: {e}");
@@ -198,122 +206,11 @@ fn trace_nonfinite(
     Ok(())
 }
 
-/// The colours of the places in the PNG, most pixels first (names for the report); places past
-/// the last share its colour.
-const PLACE_COLOURS: [(&str, [u8; 3]); 6] = [
-    ("magenta", [255, 0, 255]),
-    ("cyan", [0, 255, 255]),
-    ("yellow", [255, 255, 0]),
-    ("orange", [255, 128, 0]),
-    ("green", [0, 200, 0]),
-    ("white", [255, 255, 255]),
-];
-
 /// `OUT.nonfinite.png` for `-o OUT.exr` (the `.exr` replaced; any other name gets the suffix).
 pub fn nonfinite_png_path(out: &Path) -> PathBuf {
     let name = out.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let stem = name.strip_suffix(".exr").or_else(|| name.strip_suffix(".EXR")).unwrap_or(&name);
     out.with_file_name(format!("{stem}.nonfinite.png"))
-}
-
-/// The places where a NaN or an infinity first appeared, with their pixel counts, most first.
-/// Sites at the same place with the same text (the components of one source expression, or
-/// the steps the lowering writes for one call) are one place.
-struct NonfiniteReport {
-    /// (location, snippet, kinds, functions, pixels), most pixels first, then by location.
-    places: Vec<Place>,
-    /// The site ids of each place.
-    ids: Vec<Vec<u32>>,
-    pixels: usize,
-}
-
-struct Place {
-    location: String,
-    snippet: String,
-    kind: String,
-    function: String,
-    pixels: usize,
-}
-
-impl NonfiniteReport {
-    fn new(traced: &gdsky_naga::trace::Traced, pixels: &[[f32; 4]]) -> Self {
-        let mut per_site = vec![0usize; traced.sites.len()];
-        let mut unknown = 0usize;
-        for p in pixels {
-            match traced.site_of_alpha(p[3]) {
-                Some(site) => per_site[site.id as usize - 1] += 1,
-                None if p[3] != 0.0 => unknown += 1,
-                None => {}
-            }
-        }
-        if unknown > 0 {
-            // Only the instrumented module writes the alpha; anything else is a harness bug.
-            eprintln!("warning: {unknown} pixel(s) carry no site id (alpha neither 0 nor an id)");
-        }
-        let mut places: Vec<Place> = Vec::new();
-        let mut ids: Vec<Vec<u32>> = Vec::new();
-        for (site, &count) in traced.sites.iter().zip(&per_site) {
-            if count == 0 {
-                continue;
-            }
-            let location = site.location();
-            match places.iter().position(|p| p.location == location && p.snippet == site.snippet) {
-                Some(i) => {
-                    places[i].pixels += count;
-                    ids[i].push(site.id);
-                    if !places[i].kind.split(", ").any(|k| k == site.kind) {
-                        places[i].kind = format!("{}, {}", places[i].kind, site.kind);
-                    }
-                }
-                None => {
-                    places.push(Place {
-                        location,
-                        snippet: site.snippet.clone(),
-                        kind: site.kind.clone(),
-                        function: site.function.clone(),
-                        pixels: count,
-                    });
-                    ids.push(vec![site.id]);
-                }
-            }
-        }
-        let mut order: Vec<usize> = (0..places.len()).collect();
-        order.sort_by(|&a, &b| places[b].pixels.cmp(&places[a].pixels).then(a.cmp(&b)));
-        let mut sorted_places = Vec::with_capacity(places.len());
-        let mut sorted_ids = Vec::with_capacity(places.len());
-        let mut places: Vec<Option<Place>> = places.into_iter().map(Some).collect();
-        for i in order {
-            if let Some(p) = places[i].take() {
-                sorted_places.push(p);
-                sorted_ids.push(std::mem::take(&mut ids[i]));
-            }
-        }
-        NonfiniteReport { places: sorted_places, ids: sorted_ids, pixels: pixels.len() }
-    }
-
-    /// The index of the place whose site an alpha value names.
-    fn place_of(&self, traced: &gdsky_naga::trace::Traced, alpha: f32) -> Option<usize> {
-        let id = traced.site_of_alpha(alpha)?.id;
-        self.ids.iter().position(|ids| ids.contains(&id))
-    }
-
-    /// The printed report: `no NaN or Inf`, or a header and one line per place.
-    fn text(&self) -> String {
-        if self.places.is_empty() {
-            return "no NaN or Inf\n".to_string();
-        }
-        let total: usize = self.places.iter().map(|p| p.pixels).sum();
-        let mut s =
-            format!("NaN or Inf first made in {total} of {} pixels, at {} place(s):\n", self.pixels, self.places.len());
-        for (i, p) in self.places.iter().enumerate() {
-            let colour = PLACE_COLOURS[i.min(PLACE_COLOURS.len() - 1)].0;
-            s += &format!(
-                "  {}: `{}` ({} in {}): {} pixels ({colour})\n",
-                p.location, p.snippet, p.kind, p.function, p.pixels
-            );
-        }
-        s
-    }
 }
 
 /// Says which keys of a scene file a command does not apply (`bench` measures the

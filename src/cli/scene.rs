@@ -891,36 +891,6 @@ pub fn write_outputs(image: &Image, exr: &Path, png: Option<&PathBuf>) -> Result
     Ok(())
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn f32_limit_is_where_rounding_overflows() {
-        assert!((F32_LIMIT as f32).is_infinite());
-        assert_eq!(f64::from_bits(F32_LIMIT.to_bits() - 1) as f32, f32::MAX);
-        assert_eq!(parse_time("3.4028235e38"), Ok(f32::MAX));
-        assert_eq!(parse_time("-3.4028235e38"), Ok(f32::MIN));
-        for bad in ["3.4028236e38", "1e39", "nan", "-inf", "infinity", "1e400", "ten", ""] {
-            assert!(parse_time(bad).is_err(), "{bad}");
-        }
-    }
-
-    #[test]
-    fn ranges_are_closed_or_open_as_documented() {
-        assert!(parse_fov("180").is_err() && parse_fov("0").is_err() && parse_fov("179.9").is_ok());
-        assert!(parse_pitch("90").is_ok() && parse_pitch("-90").is_ok() && parse_pitch("90.001").is_err());
-        assert!(parse_yaw("-360").is_ok() && parse_yaw("360.5").is_err());
-        assert_eq!(parse_sun(" 10 , -30 "), Ok((10.0, -30.0)));
-        assert!(parse_sun("10").unwrap_err().contains("expected 2 comma-separated numbers"));
-        let err = parse_sun("95,0").unwrap_err();
-        assert!(err.contains("(the elevation) is out of range; accepted: −90 to 90 degrees"), "{err}");
-        assert!(parse_position("0,1,0").is_ok() && parse_position("0,1e39,0").is_err());
-        assert_eq!(parse_size("8192x2048"), Ok((8192, 2048)));
-        assert!(parse_size("8192x2049").is_err() && parse_size("0x4").is_err() && parse_size("16384x1").is_err());
-    }
-}
-
 /// The textures for `loaded`'s sampler uniforms: `--texture NAME=PATH` flags (`flags`) over the
 /// scene file's `[textures]` and a Godot material's generated textures (what
 /// [`SceneArgs::textures`] gives; `stress`, which has no scene flags, calls it directly).
@@ -1065,4 +1035,34 @@ pub fn load_textures(
         textures.push((name.to_string(), data));
     }
     Ok(textures)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn f32_limit_is_where_rounding_overflows() {
+        assert!((F32_LIMIT as f32).is_infinite());
+        assert_eq!(f64::from_bits(F32_LIMIT.to_bits() - 1) as f32, f32::MAX);
+        assert_eq!(parse_time("3.4028235e38"), Ok(f32::MAX));
+        assert_eq!(parse_time("-3.4028235e38"), Ok(f32::MIN));
+        for bad in ["3.4028236e38", "1e39", "nan", "-inf", "infinity", "1e400", "ten", ""] {
+            assert!(parse_time(bad).is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn ranges_are_closed_or_open_as_documented() {
+        assert!(parse_fov("180").is_err() && parse_fov("0").is_err() && parse_fov("179.9").is_ok());
+        assert!(parse_pitch("90").is_ok() && parse_pitch("-90").is_ok() && parse_pitch("90.001").is_err());
+        assert!(parse_yaw("-360").is_ok() && parse_yaw("360.5").is_err());
+        assert_eq!(parse_sun(" 10 , -30 "), Ok((10.0, -30.0)));
+        assert!(parse_sun("10").unwrap_err().contains("expected 2 comma-separated numbers"));
+        let err = parse_sun("95,0").unwrap_err();
+        assert!(err.contains("(the elevation) is out of range; accepted: −90 to 90 degrees"), "{err}");
+        assert!(parse_position("0,1,0").is_ok() && parse_position("0,1e39,0").is_err());
+        assert_eq!(parse_size("8192x2048"), Ok((8192, 2048)));
+        assert!(parse_size("8192x2049").is_err() && parse_size("0x4").is_err() && parse_size("16384x1").is_err());
+    }
 }

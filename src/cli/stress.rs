@@ -365,6 +365,9 @@ struct AnyOutcome {
     /// Where the worst channel is: (x, y, channel).
     worst: Option<(u32, u32, usize)>,
     sens: any::Sensitivity,
+    /// Where the case's NaN and Inf start (the traced module's report), for a case whose f32
+    /// render has any.
+    nonfinite: Option<gdsky_naga::trace::NonfiniteReport>,
 }
 
 /// The images of a generic case: f32 and f64, base and nudged.
@@ -397,6 +400,15 @@ fn stress_any(
     let variant = sky.variant(&[]).map_err(usage)?;
     let c32 = variant.compile(&gpu).map_err(usage)?;
     let c64 = variant.compile_f64(&gpu).map_err(|e| environment(format!("{name}: no f64 evaluation: {e}")))?;
+    // The NaN/Inf trace, rendered for the cases whose f32 render has any (issue #13: NaN and
+    // Inf traced to their source line automatically in stress).
+    let (traced_shader, traced) = variant.compile_traced(&gpu).map_err(usage)?;
+    let trace = |case: &any::Case| -> Result<(gdsky_naga::trace::NonfiniteReport, Vec<[f32; 4]>), ExitCode> {
+        let extra: Vec<(String, String)> = case.uniform.iter().cloned().collect();
+        let material = variant.material_with(&traced_shader.lowered, &extra).map_err(usage)?;
+        let ids = traced_shader.render_material(&gpu, &case.shot, &case.shot.builtins(), &material).map_err(usage)?;
+        Ok((gdsky_naga::trace::NonfiniteReport::new(&traced, &ids), ids))
+    };
     let render = |case: &any::Case| -> Result<AnyImages, ExitCode> {
         let extra: Vec<(String, String)> = case.uniform.iter().cloned().collect();
         let m32 = variant.material_with(&c32.lowered, &extra).map_err(usage)?;
@@ -420,7 +432,9 @@ fn stress_any(
         let w = case.shot.width as usize;
         let worst = error.worst.map(|(i, c)| ((i % w) as u32, (i / w) as u32, c));
         let sens = any::sensitivity(&images.f32, &images.f32_nudged, &images.f64, &images.f64_nudged);
-        outcomes.push(AnyOutcome { case: case.clone(), error, worst, sens });
+        let f32_nonfinite = images.f32.iter().any(|p| p[..3].iter().any(|c| !c.is_finite()));
+        let nonfinite = if f32_nonfinite { Some(trace(case)?.0) } else { None };
+        outcomes.push(AnyOutcome { case: case.clone(), error, worst, sens, nonfinite });
         bar.inc(1);
     }
     bar.finish_and_clear();
@@ -447,6 +461,22 @@ fn stress_any(
             skyrun::write_heatmap_png(&args.out_dir.join(&file), &a, &b, sweep::FLOOR as f32).map_err(environment)?;
             heatmaps.push((file, format!("{} — {what}", o.case.label)));
         }
+    }
+    // Where NaN and Inf start: the traced pixels over the f32 render, for the cases with the
+    // most non-finite pixels.
+    let mut traced_cases: Vec<&AnyOutcome> =
+        outcomes.iter().filter(|o| o.nonfinite.as_ref().is_some_and(|r| !r.places.is_empty())).collect();
+    traced_cases.sort_by_key(|o| std::cmp::Reverse(o.nonfinite.as_ref().map_or(0, traced_pixels)));
+    for o in traced_cases.iter().take(ANY_HEATMAPS) {
+        let (report, ids) = trace(&o.case)?;
+        let (w, h) = (o.case.shot.width, o.case.shot.height);
+        let base = Image::new(w, h, render(&o.case)?.f32).map_err(environment)?;
+        let colours = gdsky_naga::trace::PLACE_COLOURS;
+        let overlay: Vec<Option<[u8; 3]>> =
+            ids.iter().map(|p| report.place_of(&traced, p[3]).map(|i| colours[i.min(colours.len() - 1)].1)).collect();
+        let file = format!("nonfinite-{}.png", o.case.slug.replace(['/', ' '], "_"));
+        skyrun::write_overlay_png(&args.out_dir.join(&file), &base, &overlay).map_err(environment)?;
+        heatmaps.push((file, format!("{} — where NaN/Inf start (colours as listed)", o.case.label)));
     }
     let md = any_report(&name, &adapter.to_string(), args.quick, elapsed, &outcomes, &heatmaps);
     let md_path = args.out_dir.join("stress.md");
@@ -476,6 +506,11 @@ fn stress_any(
         return Ok(ExitCode::from(1));
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// Pixels a trace report places (those whose first NaN/Inf was found).
+fn traced_pixels(r: &gdsky_naga::trace::NonfiniteReport) -> usize {
+    r.places.iter().map(|p| p.pixels).sum()
 }
 
 /// The share of a case's channels that are ill-conditioned.
@@ -546,6 +581,28 @@ fn any_report(
     );
     let mut worst: Vec<&AnyOutcome> = outcomes.iter().collect();
     worst.sort_by(|a, b| badness(&b.error).total_cmp(&badness(&a.error)));
+    let traced: Vec<&AnyOutcome> =
+        outcomes.iter().filter(|o| o.nonfinite.as_ref().is_some_and(|r| !r.places.is_empty())).collect();
+    if !traced.is_empty() {
+        let _ = writeln!(
+            md,
+            "## Where NaN and Inf start\n\nFor each case whose f32 render has NaN or Inf, the traced module \
+             (`gdsky_naga::trace`, as `gdsky render --trace-nonfinite`) names the expression that first made a \
+             non-finite value in each pixel:\n"
+        );
+        for o in &traced {
+            let Some(r) = &o.nonfinite else { continue };
+            let _ = writeln!(md, "- **{}**: {} of {} pixels", o.case.label, traced_pixels(r), r.pixels);
+            for p in &r.places {
+                let _ = writeln!(
+                    md,
+                    "  - `{}`: `{}` ({} in {}): {} pixels",
+                    p.location, p.snippet, p.kind, p.function, p.pixels
+                );
+            }
+        }
+        let _ = writeln!(md);
+    }
     let _ = writeln!(md, "## Worst cases\n");
     for o in worst.iter().take(3) {
         let _ = writeln!(

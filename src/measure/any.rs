@@ -222,6 +222,18 @@ impl Variant {
         self.compile_lowered(gpu, canary)
     }
 
+    /// Compiles the NaN/Inf trace of this variant (`gdsky_naga::trace::instrument`): the same
+    /// colour, and as the alpha the id of the first site that made a non-finite value, which
+    /// the returned [`gdsky_naga::trace::Traced`] turns into places in the source.
+    pub fn compile_traced(&self, gpu: &Gpu) -> Result<(Compiled, gdsky_naga::trace::Traced), String> {
+        let lowered = gdsky_naga::lower(&self.front).map_err(diagnostics)?;
+        // Instrumented twice (the same ids: the rewrite is deterministic): one module is
+        // compiled, the other kept for its site table.
+        let compiled = gdsky_naga::trace::instrument(&self.front, &lowered).map_err(diagnostics)?;
+        let traced = gdsky_naga::trace::instrument(&self.front, &lowered).map_err(diagnostics)?;
+        Ok((self.compile_lowered(gpu, compiled.lowered)?, traced))
+    }
+
     fn compile_lowered(&self, gpu: &Gpu, lowered: gdsky_naga::Lowered) -> Result<Compiled, String> {
         let wgsl = gdsky_naga::to_wgsl(&lowered).map_err(|e| format!("{e:?}"))?;
         let shader = self.front.shader.as_ref().ok_or("the shader has errors")?;

@@ -57,8 +57,10 @@
 //! constants are not run and are not sites.
 
 mod budget;
+mod report;
 
 pub use budget::{BUDGET_LEFT, BUDGET_SPENT, loop_budget};
+pub use report::{NonfiniteReport, PLACE_COLOURS, Place};
 
 use crate::{Lowered, validation_diagnostic, validator_for};
 use gdshader::parse::ast;
