@@ -83,6 +83,12 @@ fn quick_stress_original_and_stable() {
     // The original's horizon error is the f32 cancellation the issue reports (tens of percent);
     // if it were tiny the bound below would prove nothing.
     assert!(original.horizon_worst > 1e-2, "{original:?}");
+    // The scale heights at 0 divide by zero: the report traces it to the shader's line.
+    let report = Path::new(env!("CARGO_TARGET_TMPDIR")).join("stress_cli/original/stress.md");
+    let md = std::fs::read_to_string(report).expect("stress.md");
+    let trace = md.split("## Where NaN and Inf start").nth(1).unwrap_or_else(|| panic!("no trace section:\n{md}"));
+    assert!(trace.contains(":205:7`: `-altitude / rayleigh_scale_height`"), "{trace}");
+    assert!(trace.contains(":206:7`: `-altitude / mie_scale_height`"), "{trace}");
 
     let stable = Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders/freeman_stable.gdshader");
     if !stable.exists() {

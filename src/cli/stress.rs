@@ -232,6 +232,14 @@ fn stress(args: &StressArgs) -> Result<ExitCode, ExitCode> {
     let gpu = open_gpu()?;
     let adapter = gpu.adapter_info();
     let mut shader = loaded.compile(&gpu)?;
+    // The NaN/Inf trace, rendered for the cases whose GPU render has any.
+    let traced = gdsky_naga::trace::instrument(&loaded.front, &loaded.lowered).map_err(|diagnostics| {
+        eprint!("{}", gdsky::frontend::diag::render_human(&loaded.front.db, &diagnostics, false));
+        ExitCode::from(1)
+    })?;
+    let traced_wgsl = gdsky_naga::to_wgsl(&traced.lowered).map_err(|e| usage(e.diagnostic(&loaded.front).message))?;
+    let mut traced_shader = loaded.compile_wgsl(&gpu, &traced_wgsl)?;
+    let mut nonfinite: Vec<(String, gdsky_naga::trace::NonfiniteReport)> = Vec::new();
     let (pano, horizon) = if args.quick { ((32, 64), (64, 16)) } else { ((128, 256), (256, 64)) };
     let size = |view: View| if view == View::Panorama { pano } else { horizon };
 
@@ -271,6 +279,20 @@ fn stress(args: &StressArgs) -> Result<ExitCode, ExitCode> {
     for case in &cases {
         bar.set_message(case.label());
         let images = bar.suspend(|| render(case))?;
+        if images.gpu.iter().any(|p| p[..3].iter().any(|c| !c.is_finite())) {
+            let params = case.params(&base).map_err(usage)?;
+            let material = sweep::material(&loaded, &params).map_err(usage)?;
+            if family.table {
+                let table = table_for(&params);
+                let image = skyrun::Image { width: table.width, height: table.height, pixels: table.texels };
+                let data = skyrun::TextureData::from_image(&image).map_err(usage)?;
+                traced_shader.set_texture(&gpu, super::scene::TRANSMITTANCE_TABLE, &data).map_err(usage)?;
+            }
+            let (w, h) = size(case.view);
+            let builtins = SkyBuiltins::from_scene(&case.scene(), w, h);
+            let ids = traced_shader.render(&gpu, case.projection(), w, h, &builtins, &material).map_err(usage)?;
+            nonfinite.push((case.label(), gdsky_naga::trace::NonfiniteReport::new(&traced, &ids.pixels)));
+        }
         let gpu_stats = sweep::error_stats(&images.gpu, &images.cpu64);
         let cpu_stats = sweep::error_stats(&images.cpu32, &images.cpu64);
         outcomes.push(Outcome {
@@ -327,7 +349,10 @@ fn stress(args: &StressArgs) -> Result<ExitCode, ExitCode> {
         heatmaps: &heatmaps,
         family: &family,
     };
-    let report = report_markdown(&context, &outcomes, &summary);
+    let mut report = report_markdown(&context, &outcomes, &summary);
+    let placed: Vec<(String, &gdsky_naga::trace::NonfiniteReport)> =
+        nonfinite.iter().map(|(label, r)| (label.clone(), r)).collect();
+    report.push_str(&nonfinite_section(&placed));
     let md_path = args.out_dir.join("stress.md");
     super::write_file(&md_path, report.as_bytes()).map_err(environment)?;
     let csv_path = args.out_dir.join("stress.csv");
@@ -508,6 +533,33 @@ fn stress_any(
     Ok(ExitCode::SUCCESS)
 }
 
+/// The report's section on where NaN and Inf start: for each case whose render has any, the
+/// traced module's places (`gdsky_naga::trace`, as `gdsky render --trace-nonfinite`). Empty when
+/// no case placed any.
+fn nonfinite_section(cases: &[(String, &gdsky_naga::trace::NonfiniteReport)]) -> String {
+    let placed: Vec<_> = cases.iter().filter(|(_, r)| !r.places.is_empty()).collect();
+    if placed.is_empty() {
+        return String::new();
+    }
+    let mut md = String::from(
+        "## Where NaN and Inf start\n\nFor each case whose f32 render has NaN or Inf, the traced module \
+         (`gdsky_naga::trace`, as `gdsky render --trace-nonfinite`) names the expression that first made a \
+         non-finite value in each pixel:\n\n",
+    );
+    for (label, r) in placed {
+        let _ = writeln!(md, "- **{label}**: {} of {} pixels", traced_pixels(r), r.pixels);
+        for p in &r.places {
+            let _ = writeln!(
+                md,
+                "  - `{}`: `{}` ({} in {}): {} pixels",
+                p.location, p.snippet, p.kind, p.function, p.pixels
+            );
+        }
+    }
+    md.push('\n');
+    md
+}
+
 /// Pixels a trace report places (those whose first NaN/Inf was found).
 fn traced_pixels(r: &gdsky_naga::trace::NonfiniteReport) -> usize {
     r.places.iter().map(|p| p.pixels).sum()
@@ -581,28 +633,9 @@ fn any_report(
     );
     let mut worst: Vec<&AnyOutcome> = outcomes.iter().collect();
     worst.sort_by(|a, b| badness(&b.error).total_cmp(&badness(&a.error)));
-    let traced: Vec<&AnyOutcome> =
-        outcomes.iter().filter(|o| o.nonfinite.as_ref().is_some_and(|r| !r.places.is_empty())).collect();
-    if !traced.is_empty() {
-        let _ = writeln!(
-            md,
-            "## Where NaN and Inf start\n\nFor each case whose f32 render has NaN or Inf, the traced module \
-             (`gdsky_naga::trace`, as `gdsky render --trace-nonfinite`) names the expression that first made a \
-             non-finite value in each pixel:\n"
-        );
-        for o in &traced {
-            let Some(r) = &o.nonfinite else { continue };
-            let _ = writeln!(md, "- **{}**: {} of {} pixels", o.case.label, traced_pixels(r), r.pixels);
-            for p in &r.places {
-                let _ = writeln!(
-                    md,
-                    "  - `{}`: `{}` ({} in {}): {} pixels",
-                    p.location, p.snippet, p.kind, p.function, p.pixels
-                );
-            }
-        }
-        let _ = writeln!(md);
-    }
+    let traced: Vec<(String, &gdsky_naga::trace::NonfiniteReport)> =
+        outcomes.iter().filter_map(|o| o.nonfinite.as_ref().map(|r| (o.case.label.clone(), r))).collect();
+    md.push_str(&nonfinite_section(&traced));
     let _ = writeln!(md, "## Worst cases\n");
     for o in worst.iter().take(3) {
         let _ = writeln!(
