@@ -243,7 +243,8 @@ fn stress(args: &StressArgs) -> Result<ExitCode, ExitCode> {
     let (pano, horizon) = if args.quick { ((32, 64), (64, 16)) } else { ((128, 256), (256, 64)) };
     let size = |view: View| if view == View::Panorama { pano } else { horizon };
 
-    let mut render = |case: &Case| -> Result<Rendered, ExitCode> {
+    // One case on the GPU with `shader` (the shader's module or its NaN/Inf trace).
+    let shade = |shader: &mut skyrun::SkyShader, case: &Case| -> Result<Vec<[f32; 4]>, ExitCode> {
         let params = case.params(&base).map_err(usage)?;
         let material = sweep::material(&loaded, &params).map_err(usage)?;
         if family.table {
@@ -255,11 +256,15 @@ fn stress(args: &StressArgs) -> Result<ExitCode, ExitCode> {
             shader.set_texture(&gpu, super::scene::TRANSMITTANCE_TABLE, &data).map_err(usage)?;
         }
         let (w, h) = size(case.view);
+        let builtins = SkyBuiltins::from_scene(&case.scene(), w, h);
+        Ok(shader.render(&gpu, case.projection(), w, h, &builtins, &material).map_err(usage)?.pixels)
+    };
+    let mut render = |case: &Case| -> Result<Rendered, ExitCode> {
+        let params = case.params(&base).map_err(usage)?;
+        let (w, h) = size(case.view);
         let scene = case.scene();
-        let builtins = SkyBuiltins::from_scene(&scene, w, h);
-        let gpu_image = shader.render(&gpu, case.projection(), w, h, &builtins, &material).map_err(usage)?;
         Ok(Rendered {
-            gpu: gpu_image.pixels,
+            gpu: shade(&mut shader, case)?,
             cpu32: (family.render32)(&params, &scene, case.projection(), w, h),
             cpu64: (family.render64)(&params, &scene, case.projection(), w, h),
         })
@@ -280,18 +285,8 @@ fn stress(args: &StressArgs) -> Result<ExitCode, ExitCode> {
         bar.set_message(case.label());
         let images = bar.suspend(|| render(case))?;
         if images.gpu.iter().any(|p| p[..3].iter().any(|c| !c.is_finite())) {
-            let params = case.params(&base).map_err(usage)?;
-            let material = sweep::material(&loaded, &params).map_err(usage)?;
-            if family.table {
-                let table = table_for(&params);
-                let image = skyrun::Image { width: table.width, height: table.height, pixels: table.texels };
-                let data = skyrun::TextureData::from_image(&image).map_err(usage)?;
-                traced_shader.set_texture(&gpu, super::scene::TRANSMITTANCE_TABLE, &data).map_err(usage)?;
-            }
-            let (w, h) = size(case.view);
-            let builtins = SkyBuiltins::from_scene(&case.scene(), w, h);
-            let ids = traced_shader.render(&gpu, case.projection(), w, h, &builtins, &material).map_err(usage)?;
-            nonfinite.push((case.label(), gdsky_naga::trace::NonfiniteReport::new(&traced, &ids.pixels)));
+            let ids = shade(&mut traced_shader, case)?;
+            nonfinite.push((case.label(), gdsky_naga::trace::NonfiniteReport::new(&traced, &ids)));
         }
         let gpu_stats = sweep::error_stats(&images.gpu, &images.cpu64);
         let cpu_stats = sweep::error_stats(&images.cpu32, &images.cpu64);

@@ -22,8 +22,7 @@ use crate::widen::graft::Grafter;
 use crate::{Lowered, validation_diagnostic, validator_for};
 use gdshader::{Diagnostic, FrontendOutput};
 use naga::{
-    AddressSpace, BinaryOperator as Bo, Block, Expression as E, Function, Handle, Literal, ScalarKind, ShaderStage,
-    Span, Statement,
+    BinaryOperator as Bo, Block, Expression as E, Function, Handle, Literal, ScalarKind, ShaderStage, Span, Statement,
 };
 use std::sync::OnceLock;
 
@@ -57,14 +56,7 @@ pub fn loop_budget(front: &FrontendOutput, lowered: &Lowered) -> Result<Lowered,
     let mut module = lowered.module.clone();
     let lib = canary_library().map_err(bug)?;
     let canary = Grafter::new(lib).routine(&mut module, "gdsky_loop_budget").map_err(bug)?;
-    let builtins = module.global_variables.iter().find_map(|(h, g)| {
-        (g.space == AddressSpace::Uniform
-            && g.binding.as_ref().is_some_and(|b| b.group == 0 && b.binding == 0)
-            && g.name.as_deref() == Some("sky_builtins"))
-        .then_some(h)
-    });
-    let pass_member = crate::wrapper::BUILTIN_FIELDS.iter().position(|f| *f == "render_pass").map(|i| i as u32);
-    let Some(pass) = builtins.zip(pass_member) else {
+    let Some(pass) = super::render_pass(&module) else {
         return Err(bug("the module has no built-ins uniform with `render_pass`".into()));
     };
     for ep in module.entry_points.iter_mut().filter(|ep| ep.stage == ShaderStage::Fragment) {

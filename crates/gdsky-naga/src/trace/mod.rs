@@ -141,13 +141,7 @@ pub fn instrument(front: &FrontendOutput, lowered: &Lowered) -> Result<Traced, V
         },
         Span::UNDEFINED,
     );
-    let builtins = module.global_variables.iter().find_map(|(h, g)| {
-        (g.space == AddressSpace::Uniform
-            && g.binding.as_ref().is_some_and(|b| b.group == 0 && b.binding == 0)
-            && g.name.as_deref() == Some("sky_builtins"))
-        .then_some(h)
-    });
-    let pass_member = crate::wrapper::BUILTIN_FIELDS.iter().position(|f| *f == "render_pass").map(|i| i as u32);
+    let pass = render_pass(&module);
 
     let mut raw_sites: Vec<(String, &'static str, Span)> = Vec::new();
     let handles: Vec<_> = module.functions.iter().map(|(h, _)| h).collect();
@@ -162,7 +156,6 @@ pub fn instrument(front: &FrontendOutput, lowered: &Lowered) -> Result<Traced, V
         let ep = &mut module.entry_points[i];
         instrument_function(&mut ep.function, register, &candidates, &name, &mut raw_sites);
         if ep.stage == ShaderStage::Fragment {
-            let pass = builtins.zip(pass_member);
             let mut body = std::mem::take(&mut ep.function.body);
             id_in_alpha(&mut ep.function, &mut body, register, pass);
             ep.function.body = body;
@@ -388,6 +381,19 @@ impl Cx<'_> {
         block.push(Statement::Emit(ex.range_from(start)), sp);
         block.push(Statement::Store { pointer, value: new }, sp);
     }
+}
+
+/// The built-ins uniform (group 0, binding 0, `sky_builtins`) and the index of its
+/// `render_pass` member: what tells a fragment entry point's sub-passes from its full pass.
+pub(crate) fn render_pass(module: &naga::Module) -> Option<(Handle<GlobalVariable>, u32)> {
+    let builtins = module.global_variables.iter().find_map(|(h, g)| {
+        (g.space == AddressSpace::Uniform
+            && g.binding.as_ref().is_some_and(|b| b.group == 0 && b.binding == 0)
+            && g.name.as_deref() == Some("sky_builtins"))
+        .then_some(h)
+    });
+    let member = crate::wrapper::BUILTIN_FIELDS.iter().position(|f| *f == "render_pass").map(|i| i as u32);
+    builtins.zip(member)
 }
 
 /// What [`rewrite_returns`] calls for each `return v`: given the function, the block the
