@@ -50,10 +50,14 @@
 //! binding's business, not the texture's.
 
 mod gradient;
+mod gradient_texture;
 mod seamless;
 mod warp3d;
 
 pub use gradient::Gradient;
+pub use gradient_texture::{
+    Curve, CurvePoint, CurveTexture, GradientTexture1D, GradientTexture2D, RampFormat, RampImage,
+};
 
 use fastnoise_lite as fnl;
 use gradient::Ramp;
