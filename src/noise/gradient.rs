@@ -169,18 +169,58 @@ fn cubic_interpolate(from: f32, to: f32, pre: f32, post: f32, w: f32) -> f32 {
         + (-pre + 3.0 * from - 3.0 * to + post) * (w * w * w))
 }
 
-/// `Color::srgb_to_linear` (core/math/color.h, f32; alpha unchanged).
+/// `Color::srgb_to_linear` (core/math/color.h; alpha unchanged). Godot 4.6 computes the
+/// base in f64 and rounds it to f32 before the f32 `pow` (measured against Godot: the f32
+/// form of later sources is one ulp off in most RGBAF texels).
 fn srgb_to_linear(c: [f32; 4]) -> [f32; 4] {
     let f = |v: f32| {
-        if v < 0.04045 { v * (1.0 / 12.92) } else { ((v + 0.055) * (1.0 / (1.0 + 0.055)) as f32).powf(2.4) }
+        if v < 0.04045 {
+            v * (1.0 / 12.92)
+        } else {
+            (((f64::from(v) + 0.055) * (1.0 / (1.0 + 0.055))) as f32).powf(2.4)
+        }
     };
     [f(c[0]), f(c[1]), f(c[2]), c[3]]
 }
 
-/// `Color::linear_to_srgb` (f32; alpha unchanged).
+/// `Color::linear_to_srgb` (alpha unchanged): the f32 `pow`, then the scale and offset in f64,
+/// rounded to f32, as Godot 4.6 writes it.
 fn linear_to_srgb(c: [f32; 4]) -> [f32; 4] {
-    let f = |v: f32| if v < 0.0031308 { 12.92 * v } else { (1.0 + 0.055) * v.powf(1.0 / 2.4) - 0.055 };
+    let f = |v: f32| {
+        if v < 0.0031308 { 12.92 * v } else { ((1.0 + 0.055) * f64::from(v.powf(1.0 / 2.4)) - 0.055) as f32 }
+    };
     [f(c[0]), f(c[1]), f(c[2]), c[3]]
+}
+
+/// `cbrtf` as Godot's Web export (emscripten's musl, from FreeBSD) computes it: a bit-trick
+/// first guess and two Halley steps in f64, rounded once to f32. Rust's `f32::cbrt` calls the
+/// host's libm, whose last bit differs at some inputs (measured: one RGBA8 code in one texel of
+/// a 256-wide cubic OKLab gradient).
+fn cbrtf(x: f32) -> f32 {
+    const B1: u32 = 709_958_130; // (127 − 127/3 − 0.03306235651) · 2²³
+    const B2: u32 = 642_849_266; // (127 − 127/3 − 24/3 − 0.03306235651) · 2²³
+    let bits = x.to_bits();
+    let mut hx = bits & 0x7fff_ffff;
+    if hx >= 0x7f80_0000 {
+        return x + x;
+    }
+    let guess_bits = if hx < 0x0080_0000 {
+        if hx == 0 {
+            return x;
+        }
+        // Subnormal: scale by 2²⁴ to read an exponent.
+        hx = (x * 16_777_216.0).to_bits() & 0x7fff_ffff;
+        hx / 3 + B2
+    } else {
+        hx / 3 + B1
+    };
+    let mut t = f64::from(f32::from_bits((bits & 0x8000_0000) | guess_bits));
+    let xd = f64::from(x);
+    for _ in 0..2 {
+        let r = t * t * t;
+        t = t * (xd + xd + r) / (xd + r + r);
+    }
+    t as f32
 }
 
 /// Björn Ottosson's linear sRGB → OKLab, as thirdparty/misc/ok_color.h computes it in f32.
@@ -190,7 +230,7 @@ fn linear_srgb_to_oklab(c: [f32; 3]) -> [f32; 3] {
     let l = 0.4122214708 * c[0] + 0.5363325363 * c[1] + 0.0514459929 * c[2];
     let m = 0.2119034982 * c[0] + 0.6806995451 * c[1] + 0.1073969566 * c[2];
     let s = 0.0883024619 * c[0] + 0.2817188376 * c[1] + 0.6299787005 * c[2];
-    let (l, m, s) = (l.cbrt(), m.cbrt(), s.cbrt());
+    let (l, m, s) = (cbrtf(l), cbrtf(m), cbrtf(s));
     [
         0.2104542553 * l + 0.7936177850 * m - 0.0040720468 * s,
         1.9779984951 * l - 2.4285922050 * m + 0.4505937099 * s,
@@ -245,6 +285,17 @@ mod tests {
             assert!(c[..3].iter().all(|v| (v - expected).abs() < 1e-4), "space {space}: {c:?}");
             assert_eq!(c[3], 1.0);
         }
+    }
+
+    #[test]
+    fn cbrtf_is_within_an_ulp_of_the_exact_root() {
+        for x in [27.0f32, 0.001, 1e-40, -8.0, 0.3, 123.456, 7e30] {
+            let exact = f64::from(x).cbrt();
+            let got = cbrtf(x);
+            assert!((f64::from(got) - exact).abs() <= f64::from(got.abs()) * 1.2e-7, "{x}: {got} vs {exact}");
+        }
+        assert_eq!(cbrtf(27.0), 3.0);
+        assert_eq!(cbrtf(0.0), 0.0);
     }
 
     #[test]

@@ -200,7 +200,8 @@ pub struct GradientTexture2D {
     pub height: i64,
     /// `use_hdr`: RGBAF instead of RGBA8.
     pub use_hdr: bool,
-    /// `fill`: 0 linear, 1 radial, 2 square, 3 conic.
+    /// `fill`: 0 linear, 1 radial, 2 square. A 3 (conic, in Godot after 4.6) gives what 4.6
+    /// makes of it: offset 0 everywhere, the gradient's start colour.
     pub fill: i64,
     /// `fill_from`, in UV (0 … 1 across the texture), default (0, 0).
     pub fill_from: [f64; 2],
@@ -240,15 +241,6 @@ fn length(a: V2) -> f32 {
     (a[0] * a[0] + a[1] * a[1]).sqrt()
 }
 
-/// `Math::fposmod` for floats.
-fn fposmod(x: f32, y: f32) -> f32 {
-    let mut v = x % y;
-    if (v < 0.0 && y > 0.0) || (v > 0.0 && y < 0.0) {
-        v += y;
-    }
-    v + 0.0
-}
-
 impl GradientTexture2D {
     /// `_get_gradient_offset_at`: where texel (x, y) falls on the gradient.
     fn offset_at(&self, x: usize, y: usize, from: V2, to: V2, fill: i64, repeat: i64) -> f32 {
@@ -284,12 +276,9 @@ impl GradientTexture2D {
                 let d = sub(pos, from);
                 d[0].abs().max(d[1].abs()) / span[0].abs().max(span[1].abs())
             }
-            _ => {
-                let d = sub(pos, from);
-                let tau = std::f64::consts::TAU;
-                // `/ Math::TAU` divides by the double constant.
-                (f64::from(fposmod(d[1].atan2(d[0]) - span[1].atan2(span[0]), tau as f32)) / tau) as f32
-            }
+            // Godot 4.6 has no other fill (the conic fill came later): no branch sets the
+            // offset, which stays 0.
+            _ => 0.0,
         };
         match repeat {
             0 => {
@@ -324,7 +313,7 @@ impl GradientTexture2D {
             f => {
                 return Err(out_of_range(
                     "fill",
-                    format!("{f} is not 0 (linear), 1 (radial), 2 (square) or 3 (conic)"),
+                    format!("{f} is not 0 (linear), 1 (radial), 2 (square) or 3 (conic, newer than Godot 4.6)"),
                 ));
             }
         };

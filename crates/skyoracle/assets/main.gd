@@ -90,6 +90,8 @@ func _run(text: String) -> void:
 		reply = await _compile(job)
 	elif job.get("op") == "noise":
 		reply = await _noise(job)
+	elif job.get("op") == "ramp":
+		reply = _ramp(job)
 	elif job.get("op") == "defaults":
 		reply = _defaults(job)
 	else:
@@ -256,6 +258,8 @@ func _set_properties(object: Object, properties: Dictionary, order: Array) -> St
 				v = float(v)
 			TYPE_BOOL:
 				v = bool(v)
+			TYPE_VECTOR2:
+				v = Vector2(v[0], v[1])
 			TYPE_VECTOR3:
 				v = Vector3(v[0], v[1], v[2])
 			TYPE_PACKED_FLOAT32_ARRAY:
@@ -285,6 +289,8 @@ func _json_fits(v, type: int) -> bool:
 			return number.call(v)
 		TYPE_BOOL:
 			return typeof(v) == TYPE_BOOL
+		TYPE_VECTOR2:
+			return typeof(v) == TYPE_ARRAY and v.size() == 2 and v.all(number)
 		TYPE_VECTOR3:
 			return typeof(v) == TYPE_ARRAY and v.size() == 3 and v.all(number)
 		TYPE_PACKED_FLOAT32_ARRAY:
@@ -346,6 +352,14 @@ func _format_name(format: int) -> String:
 			return "RGBA8"
 		Image.FORMAT_RGB8:
 			return "RGB8"
+		Image.FORMAT_RGBAF:
+			return "RGBAF"
+		Image.FORMAT_RGBAH:
+			return "RGBAH"
+		Image.FORMAT_RGBF:
+			return "RGBF"
+		Image.FORMAT_RF:
+			return "RF"
 	return "format %d" % format
 
 
@@ -388,6 +402,87 @@ func _noise(job: Dictionary) -> Dictionary:
 	return {"width": first.get_width(), "height": first.get_height(), "format": _format_name(first.get_format()), "mipmaps": mipmaps, "layers": layers, "mip_data": mip_data}
 
 
+## A GradientTexture1D, GradientTexture2D or CurveTexture built from {"class": ..., "texture":
+## {...}, "gradient": {...} or null, "curve": {...} or null}; or an error message.
+func _generated_ramp(spec: Dictionary):
+	var name := str(spec.get("class", ""))
+	if not name in ["GradientTexture1D", "GradientTexture2D", "CurveTexture"]:
+		return "the oracle does not build a %s" % name
+	var texture = ClassDB.instantiate(name)
+	var error := ""
+	var g = spec.get("gradient")
+	if typeof(g) == TYPE_DICTIONARY:
+		var gradient := Gradient.new()
+		# Offsets first: set_colors and set_offsets each resize the point list.
+		error = _set_properties(gradient, g, ["offsets", "colors"])
+		if error != "":
+			return error
+		texture.gradient = gradient
+	var c = spec.get("curve")
+	if typeof(c) == TYPE_DICTIONARY:
+		texture.curve = _curve(c)
+	error = _set_properties(texture, spec.get("texture", {}), [])
+	if error != "":
+		return error
+	return texture
+
+
+## A Curve as loading a .tres makes one: `_limits` [min_value, max_value, min_domain,
+## max_domain] and `bake_resolution`, then `_data` (x, y, left and right tangent, left and right
+## mode per point), stored as given: no tangent is recomputed from its mode.
+func _curve(c: Dictionary) -> Curve:
+	var curve := Curve.new()
+	curve.set("_limits", [float(c.get("min_value", 0.0)), float(c.get("max_value", 1.0)), float(c.get("min_domain", 0.0)), float(c.get("max_domain", 1.0))])
+	curve.bake_resolution = int(c.get("bake_resolution", 100))
+	var data := []
+	for p in c.get("points", []):
+		data.append_array([Vector2(p[0], p[1]), float(p[2]), float(p[3]), int(p[4]), int(p[5])])
+	curve.set("_data", data)
+	return curve
+
+
+## The image of a gradient or curve texture, base64, in Godot's format.
+func _ramp(job: Dictionary) -> Dictionary:
+	var made = _generated_ramp(job.get("spec", {}))
+	if typeof(made) == TYPE_STRING:
+		return {"error": made}
+	var image: Image = null
+	var quantized := false
+	if made is CurveTexture:
+		# CurveTexture has no get_image() (Texture2D's returns null) and reading the float
+		# texture back through WebGL2 would go through 8-bit pixels: build the image
+		# CurveTexture::_update builds, from the same Curve.sample_baked calls at i / width.
+		var t: CurveTexture = made
+		var red := t.texture_mode == CurveTexture.TEXTURE_MODE_RED
+		var values := PackedFloat32Array()
+		for i in t.width:
+			var v := 0.0
+			if t.curve != null:
+				v = t.curve.sample_baked(i / float(t.width))
+			values.append(v)
+			if not red:
+				values.append(v)
+				values.append(v)
+		image = Image.create_from_data(t.width, 1, false, Image.FORMAT_RF if red else Image.FORMAT_RGBF, values.to_byte_array())
+	elif made is GradientTexture1D and made.use_hdr:
+		# Reading an RGBAF texture back through WebGL2 goes through 8-bit pixels (measured:
+		# values clamped to 0 … 1 and rounded to 1/255): build the image
+		# GradientTexture1D::_update builds, from the same Gradient.sample calls.
+		var t: GradientTexture1D = made
+		if t.gradient != null:
+			image = Image.create_empty(t.width, 1, false, Image.FORMAT_RGBAF)
+			for i in t.width:
+				image.set_pixel(i, 0, t.gradient.sample(i / float(t.width - 1)))
+	else:
+		# A GradientTexture2D with use_hdr comes back through 8-bit pixels (see above); the
+		# reply says so, and its offsets are not reachable from GDScript.
+		image = made.get_image()
+		quantized = made is GradientTexture2D and made.use_hdr
+	if image == null:
+		return {"error": "Godot generated no image"}
+	return {"width": image.get_width(), "height": image.get_height(), "format": _format_name(image.get_format()), "data": Marshalls.raw_to_base64(image.get_data()), "quantized": quantized}
+
+
 ## The values a new instance of a class has for the named properties (Vector3 and packed arrays
 ## as JSON arrays, objects as their class name).
 func _defaults(job: Dictionary) -> Dictionary:
@@ -399,6 +494,8 @@ func _defaults(job: Dictionary) -> Dictionary:
 	for property in job.get("properties", []):
 		var v = object.get(property)
 		match typeof(v):
+			TYPE_VECTOR2:
+				v = [v.x, v.y]
 			TYPE_VECTOR3:
 				v = [v.x, v.y, v.z]
 			TYPE_PACKED_FLOAT32_ARRAY:

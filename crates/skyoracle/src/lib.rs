@@ -176,6 +176,10 @@
 //! (v, v, v) for an L8 code v, and gdsky's `gdsky::noise` generates the same bytes as Godot in
 //! every configuration tried (docs/noise.md). A 64×64 texture takes about 0.1 s.
 //!
+//! [`Oracle::ramp_image`] does the same for a `GradientTexture1D`, `GradientTexture2D` or
+//! `CurveTexture` ([`RampTextureSpec`], with its `Gradient` or `Curve`), returning the image in
+//! Godot's format (RGBA8, RGBAF with `use_hdr`, RGBF or RF for a curve).
+//!
 //! ## Compile checks
 //!
 //! [`Oracle::compile`] sets the code on a fresh Shader, draws two frames (so the GL driver
@@ -230,6 +234,7 @@ mod job;
 mod noise;
 mod pck;
 mod process;
+mod ramp;
 pub mod recover;
 
 use base64::Engine as _;
@@ -244,6 +249,7 @@ pub use install::{INSTALL_COMMAND, Installation, Missing, MissingPart};
 pub use job::{Brackets, Camera, Job, MAX_SIDE, MAX_TEXTURE_SIDE, MIN_SIDE, Sun, UniformValue};
 pub use noise::{GodotNoiseImage, NoiseTextureSpec};
 pub use pck::write_pck;
+pub use ramp::{GodotRampImage, RampTextureSpec};
 pub use recover::Transfer;
 
 use process::{Driver, WorkDir};
