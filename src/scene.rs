@@ -373,6 +373,9 @@ pub struct SceneFile {
     pub generated_textures: Vec<crate::godot::GeneratedTexture>,
     /// 3D textures generated for sampler uniforms (a Godot material's `NoiseTexture3D`s).
     pub generated_volumes: Vec<crate::godot::GeneratedVolume>,
+    /// Gradient and curve textures generated for sampler uniforms (a Godot material's
+    /// `GradientTexture1D`, `GradientTexture2D` and `CurveTexture`s).
+    pub generated_ramps: Vec<crate::godot::GeneratedRamp>,
     db: SourceDb,
     file: FileId,
 }
@@ -796,6 +799,7 @@ impl SceneFile {
             animate,
             generated_textures: Vec::new(),
             generated_volumes: Vec::new(),
+            generated_ramps: Vec::new(),
             db,
             file,
         })
@@ -833,6 +837,7 @@ impl SceneFile {
             animate: None,
             generated_textures: settings.generated,
             generated_volumes: settings.generated_volumes,
+            generated_ramps: settings.generated_ramps,
             db: material.db,
             file: material.file,
         }
@@ -936,7 +941,8 @@ impl SceneFile {
         let given = self.textures.iter().find(|t| t.name == name).map(|t| t.span.clone());
         let generated = || self.generated_textures.iter().find(|t| t.name == name).map(|t| t.span.clone());
         let volume = || self.generated_volumes.iter().find(|t| t.name == name).map(|t| t.span.clone());
-        let span = given.or_else(generated).or_else(volume).unwrap_or(0..0);
+        let ramp = || self.generated_ramps.iter().find(|t| t.name == name).map(|t| t.span.clone());
+        let span = given.or_else(generated).or_else(volume).or_else(ramp).unwrap_or(0..0);
         let d = Diagnostic::error(SCENE_VALUE, message.to_string()).with_primary(self.file, span, message.to_string());
         render_human(&self.db, &[d], false)
     }

@@ -516,6 +516,8 @@ enum Generated<'a> {
     Plane(&'a gdsky::noise::NoiseTexture2D),
     /// A `NoiseTexture3D`.
     Volume(&'a gdsky::noise::NoiseTexture3D),
+    /// A `GradientTexture1D`, `GradientTexture2D` or `CurveTexture`.
+    Ramp(&'a gdsky::noise::RampTexture),
 }
 
 /// The texture shape a sampler uniform takes: a cube map for `samplerCube`, a 3D texture for
@@ -915,7 +917,10 @@ pub fn load_textures(
         .iter()
         .flat_map(|s| {
             let planes = s.generated_textures.iter().map(|g| (g.name.as_str(), Generated::Plane(&g.texture)));
-            planes.chain(s.generated_volumes.iter().map(|g| (g.name.as_str(), Generated::Volume(&g.texture))))
+            let ramps = s.generated_ramps.iter().map(|g| (g.name.as_str(), Generated::Ramp(&g.texture)));
+            planes
+                .chain(s.generated_volumes.iter().map(|g| (g.name.as_str(), Generated::Volume(&g.texture))))
+                .chain(ramps)
         })
         .filter(|(name, _)| !wanted.iter().any(|(n, _, _)| n == name))
         .collect();
@@ -1018,6 +1023,8 @@ pub fn load_textures(
                     .and_then(|s| skyrun::TextureData::volume(&s))
                     .map_err(|err| fail(format!("`{name}`: {err}")))?
             }
+            // No mip levels: Godot creates gradient and curve textures without them.
+            Generated::Ramp(t) => t.generate().map_err(|err| fail(format!("`{name}`: {err}")))?,
         };
         // Raw texels even for a `source_color` sampler: Godot 4.6's Compatibility renderer
         // (the oracle's) reads a generated noise texture undecoded (measured on the corpus:
@@ -1028,6 +1035,7 @@ pub fn load_textures(
             let what = match g {
                 Generated::Plane(_) => "NoiseTexture2D",
                 Generated::Volume(_) => "NoiseTexture3D",
+                Generated::Ramp(t) => t.class(),
             };
             skyrun::check_texture(&declared, &bindings, name, &data)
                 .map_err(|err| fail(format!("the material's {what}: {err}")))?;

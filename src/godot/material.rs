@@ -49,6 +49,24 @@ pub enum TextureSource {
     /// A `NoiseTexture2D` or `NoiseTexture3D` and the resources it refers to, generated when
     /// the texture is read.
     Noise(Box<NoiseSections>),
+    /// A `GradientTexture1D`, `GradientTexture2D` or `CurveTexture` and its `Gradient` or
+    /// `Curve`, generated when the texture is read.
+    Ramp(Box<RampSections>),
+}
+
+/// A gradient or curve texture's section and the section of its `gradient` or `curve`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RampSections {
+    /// The file holding the sections.
+    pub file: FileId,
+    /// `GradientTexture1D`, `GradientTexture2D` or `CurveTexture`.
+    pub class: String,
+    /// The texture's section.
+    pub texture: Section,
+    /// The `Gradient` section, when `gradient` is set.
+    pub gradient: Option<Section>,
+    /// The `Curve` section, when `curve` is set.
+    pub curve: Option<Section>,
 }
 
 /// A `NoiseTexture2D` (or `NoiseTexture3D`) section and the sections of its `noise` (a
@@ -122,6 +140,18 @@ pub struct GeneratedTexture {
     pub span: Span,
 }
 
+/// A gradient or curve texture the material generates (`GradientTexture1D`,
+/// `GradientTexture2D`, `CurveTexture`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct GeneratedRamp {
+    /// The sampler uniform.
+    pub name: String,
+    /// What to generate ([`crate::noise::RampTexture::generate`]).
+    pub texture: crate::noise::RampTexture,
+    /// Where the material file gives it.
+    pub span: Span,
+}
+
 /// A 3D texture the material generates: a `NoiseTexture3D` for a `sampler3D`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct GeneratedVolume {
@@ -145,6 +175,8 @@ pub struct MaterialSettings {
     pub generated: Vec<GeneratedTexture>,
     /// Generated 3D textures for sampler uniforms.
     pub generated_volumes: Vec<GeneratedVolume>,
+    /// Generated gradient and curve textures for sampler uniforms.
+    pub generated_ramps: Vec<GeneratedRamp>,
     /// Warnings, rendered (parameters that name no uniform); empty when none.
     pub warnings: String,
 }
@@ -534,36 +566,52 @@ impl Loader {
         let res = self.follow(doc, value)?;
         let ty = self.type_of(res);
         let (tfile, section) = (self.doc(res).file, self.section(res).clone());
+        // A linked resource's section (`noise`, `color_ramp`, `gradient`, `curve`), checked
+        // for its type; `None` when unset or null.
+        let mut linked = |name: &str, want: &str| -> Result<Option<Section>, Failure> {
+            let Some(entry) = section.property(name) else { return Ok(None) };
+            if matches!(entry.value.kind, ValueKind::Null) {
+                return Ok(None);
+            }
+            let value = entry.value.clone();
+            let target = self.follow(res.doc, &value)?;
+            let found = self.type_of(target);
+            if found != want {
+                return Err(Failure::Invalid(error(
+                    codes::BAD_NOISE,
+                    tfile,
+                    value.span.clone(),
+                    format!("`{name}` is a {found}; gdsky generates a {ty} from a {want}"),
+                )));
+            }
+            let mut target_section = self.section(target).clone();
+            // A sub-resource's `type` lives in its header; a `[resource]`'s in its
+            // file's header: keep it where readers look.
+            if target_section.attribute("type").is_none() {
+                target_section.attributes.push(super::Entry {
+                    name: "type".into(),
+                    name_span: 0..0,
+                    value: Value { kind: ValueKind::String(found), span: 0..0 },
+                });
+            }
+            Ok(Some(target_section))
+        };
         match ty.as_str() {
-            "NoiseTexture2D" | "NoiseTexture3D" => {
-                let mut linked = |name: &str, want: &str| -> Result<Option<Section>, Failure> {
-                    let Some(entry) = section.property(name) else { return Ok(None) };
-                    if matches!(entry.value.kind, ValueKind::Null) {
-                        return Ok(None);
-                    }
-                    let value = entry.value.clone();
-                    let target = self.follow(res.doc, &value)?;
-                    let found = self.type_of(target);
-                    if found != want {
-                        return Err(Failure::Invalid(error(
-                            codes::BAD_NOISE,
-                            tfile,
-                            value.span.clone(),
-                            format!("`{name}` is a {found}; gdsky generates noise from a {want}"),
-                        )));
-                    }
-                    let mut target_section = self.section(target).clone();
-                    // A sub-resource's `type` lives in its header; a `[resource]`'s in its
-                    // file's header: keep it where readers look.
-                    if target_section.attribute("type").is_none() {
-                        target_section.attributes.push(super::Entry {
-                            name: "type".into(),
-                            name_span: 0..0,
-                            value: Value { kind: ValueKind::String(found), span: 0..0 },
-                        });
-                    }
-                    Ok(Some(target_section))
+            "GradientTexture1D" | "GradientTexture2D" | "CurveTexture" => {
+                let (gradient, curve) = if ty == "CurveTexture" {
+                    (None, linked("curve", "Curve")?)
+                } else {
+                    (linked("gradient", "Gradient")?, None)
                 };
+                Ok(TextureSource::Ramp(Box::new(RampSections {
+                    file: tfile,
+                    class: ty.clone(),
+                    texture: section.clone(),
+                    gradient,
+                    curve,
+                })))
+            }
+            "NoiseTexture2D" | "NoiseTexture3D" => {
                 let noise = linked("noise", "FastNoiseLite")?;
                 let color_ramp = linked("color_ramp", "Gradient")?;
                 let volume = ty == "NoiseTexture3D";
@@ -579,7 +627,8 @@ impl Loader {
                 error(codes::BAD_TEXTURE, file, value.span.clone(), format!("gdsky cannot use a {other} as a texture"))
                     .with_secondary(tfile, section.span.clone(), "defined here")
                     .with_note(
-                        "textures gdsky reads: PNG and OpenEXR image files by path, NoiseTexture2D and NoiseTexture3D",
+                        "textures gdsky reads: PNG and OpenEXR image files by path, NoiseTexture2D, NoiseTexture3D, \
+                         GradientTexture1D, GradientTexture2D and CurveTexture",
                     ),
             )),
         }
@@ -743,6 +792,11 @@ fn push_texture(out: &mut MaterialSettings, name: &str, source: &TextureSource, 
     match source {
         TextureSource::Image(path) => {
             out.textures.push(TextureSetting { name: name.to_string(), path: path.clone(), span })
+        }
+        TextureSource::Ramp(r) => {
+            let texture =
+                super::ramp::ramp_texture(r.file, &r.class, &r.texture, r.gradient.as_ref(), r.curve.as_ref())?;
+            out.generated_ramps.push(GeneratedRamp { name: name.to_string(), texture, span })
         }
         TextureSource::Noise(n) if n.volume => {
             let texture = super::noise::noise_texture_3d(n.file, &n.texture, n.noise.as_ref(), n.color_ramp.as_ref())?;

@@ -50,11 +50,12 @@
 
 mod material;
 mod noise;
+mod ramp;
 pub mod text;
 
 pub use material::{
-    GeneratedTexture, GeneratedVolume, MaterialError, MaterialSettings, MaterialShader, NoiseSections, Parameter,
-    ParameterValue, SkyMaterial, TextureSource, load_sky_material,
+    GeneratedRamp, GeneratedTexture, GeneratedVolume, MaterialError, MaterialSettings, MaterialShader, NoiseSections,
+    Parameter, ParameterValue, RampSections, SkyMaterial, TextureSource, load_sky_material,
 };
 pub use text::{Document, Entry, Section, Value, ValueKind};
 

@@ -9,23 +9,23 @@ use crate::noise::{FastNoiseLite, Gradient, NoiseTexture2D, NoiseTexture3D};
 use gdshader::diag::{Diagnostic, FileId};
 
 /// A property's value of the wrong kind, located.
-fn wrong(file: FileId, entry: &Entry, expected: &str) -> Diagnostic {
+pub(super) fn wrong(file: FileId, entry: &Entry, expected: &str) -> Diagnostic {
     let m = format!("`{}` must be {expected}, not {}", entry.name, entry.value.describe());
     Diagnostic::error(codes::BAD_NOISE, m.clone()).with_primary(file, entry.value.span.clone(), m)
 }
 
-fn int(file: FileId, e: &Entry) -> Result<i64, Diagnostic> {
+pub(super) fn int(file: FileId, e: &Entry) -> Result<i64, Diagnostic> {
     match e.value.kind {
         ValueKind::Int(i) => Ok(i),
         _ => Err(wrong(file, e, "an int")),
     }
 }
 
-fn float(file: FileId, e: &Entry) -> Result<f64, Diagnostic> {
+pub(super) fn float(file: FileId, e: &Entry) -> Result<f64, Diagnostic> {
     e.value.number().ok_or_else(|| wrong(file, e, "a number"))
 }
 
-fn boolean(file: FileId, e: &Entry) -> Result<bool, Diagnostic> {
+pub(super) fn boolean(file: FileId, e: &Entry) -> Result<bool, Diagnostic> {
     match e.value.kind {
         ValueKind::Bool(b) => Ok(b),
         _ => Err(wrong(file, e, "true or false")),
@@ -33,7 +33,7 @@ fn boolean(file: FileId, e: &Entry) -> Result<bool, Diagnostic> {
 }
 
 /// The numbers of a constructor named one of `names`.
-fn numbers(value: &Value, names: &[&str]) -> Option<Vec<f64>> {
+pub(super) fn numbers(value: &Value, names: &[&str]) -> Option<Vec<f64>> {
     match &value.kind {
         ValueKind::Constructor { name, args } if names.contains(&name.as_str()) => {
             args.iter().map(Value::number).collect()
@@ -131,7 +131,7 @@ fn fast_noise_lite(file: FileId, section: &Section) -> Result<FastNoiseLite, Dia
     Ok(n)
 }
 
-fn gradient(file: FileId, section: &Section) -> Result<Gradient, Diagnostic> {
+pub(super) fn gradient(file: FileId, section: &Section) -> Result<Gradient, Diagnostic> {
     let mut g = Gradient::default();
     for e in &section.properties {
         match e.name.as_str() {

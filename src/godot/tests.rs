@@ -371,9 +371,9 @@ fn material_errors_are_located_in_the_file_that_holds_them() {
                   shader_parameter/clouds = ExtResource(\"2\")\n",
             ),
             (
-                "gradient.tres",
+                "curve_xyz.tres",
                 b"[gd_resource type=\"ShaderMaterial\" format=3]\n\n[ext_resource type=\"Shader\" path=\"res://sky.gdshader\" id=\"1\"]\n\
-                  [sub_resource type=\"GradientTexture1D\" id=\"G\"]\n\n[resource]\nshader = ExtResource(\"1\")\n\
+                  [sub_resource type=\"CurveXYZTexture\" id=\"G\"]\n\n[resource]\nshader = ExtResource(\"1\")\n\
                   shader_parameter/clouds = SubResource(\"G\")\n",
             ),
             (
@@ -395,7 +395,7 @@ fn material_errors_are_located_in_the_file_that_holds_them() {
         "procedural.tres",
         "no_env.tscn",
         "jpg.tres",
-        "gradient.tres",
+        "curve_xyz.tres",
         "missing_id.tres",
         "not_utf8.tres",
         "format4.tres",
@@ -408,6 +408,65 @@ fn material_errors_are_located_in_the_file_that_holds_them() {
     insta::assert_snapshot!("material_wrong_type.tres", strip(err));
     // A file that is not there: unreadable (exit 2), not malformed.
     assert!(matches!(load_sky_material(&dir.join("absent.tres")), Err(MaterialError::Read(_))));
+}
+
+#[test]
+fn gradient_and_curve_textures_are_read_with_their_resources() {
+    let dir = project(
+        "ramps",
+        &[
+            (
+                "sky.gdshader",
+                b"shader_type sky;\nuniform sampler2D clouds;\nuniform sampler2D bands;\n\
+                  void sky() { COLOR = texture(clouds, SKY_COORDS).rgb * texture(bands, SKY_COORDS).r; }\n",
+            ),
+            (
+                "ramps.tres",
+                b"[gd_resource type=\"ShaderMaterial\" format=3]\n\n[ext_resource type=\"Shader\" path=\"res://sky.gdshader\" id=\"1\"]\n\n\
+                  [sub_resource type=\"Gradient\" id=\"moon\"]\noffsets = PackedFloat32Array(0, 0.6)\n\
+                  colors = PackedColorArray(1, 1, 0.9, 1, 0, 0, 0, 0)\n\n\
+                  [sub_resource type=\"GradientTexture2D\" id=\"disc\"]\ngradient = SubResource(\"moon\")\nwidth = 32\n\
+                  use_hdr = true\nfill = 1\nfill_from = Vector2(0.5, 0.5)\nfill_to = Vector2(1, 0.5)\nrepeat = 2\n\n\
+                  [sub_resource type=\"Curve\" id=\"c\"]\n_limits = [-1.0, 2.0, 0.0, 1.0]\nbake_resolution = 64\n\
+                  _data = [Vector2(0, 1), 0.0, -1.5, 0, 0, Vector2(1, 0), 0.25, 0.0, 0, 1]\npoint_count = 2\n\n\
+                  [sub_resource type=\"CurveTexture\" id=\"ct\"]\ncurve = SubResource(\"c\")\ntexture_mode = 1\n\n\
+                  [resource]\nshader = ExtResource(\"1\")\nshader_parameter/clouds = SubResource(\"disc\")\n\
+                  shader_parameter/bands = SubResource(\"ct\")\n",
+            ),
+            (
+                "bad_curve.tres",
+                b"[gd_resource type=\"ShaderMaterial\" format=3]\n\n[ext_resource type=\"Shader\" path=\"res://sky.gdshader\" id=\"1\"]\n\n\
+                  [sub_resource type=\"Curve\" id=\"c\"]\n_data = [Vector2(0, 1), 0.0, 0.0, 0, 7]\n\n\
+                  [sub_resource type=\"CurveTexture\" id=\"ct\"]\ncurve = SubResource(\"c\")\n\n\
+                  [resource]\nshader = ExtResource(\"1\")\nshader_parameter/clouds = SubResource(\"ct\")\n",
+            ),
+        ],
+    );
+    let material = load_sky_material(&dir.join("ramps.tres")).unwrap();
+    let front = material.check_shader().unwrap();
+    let shader = front.shader.as_ref().unwrap();
+    let settings = material.settings(shader).unwrap();
+    let ramps = &settings.generated_ramps;
+    assert_eq!(ramps.len(), 2, "{ramps:?}");
+    let crate::noise::RampTexture::Gradient2D(disc) = &ramps[0].texture else { panic!("{:?}", ramps[0]) };
+    assert_eq!((disc.width, disc.height, disc.use_hdr, disc.fill, disc.repeat), (32, 64, true, 1, 2));
+    assert_eq!((disc.fill_from, disc.fill_to), ([0.5, 0.5], [1.0, 0.5]));
+    assert_eq!(disc.gradient.as_ref().unwrap().offsets, [0.0, 0.6]);
+    let crate::noise::RampTexture::Curve(ct) = &ramps[1].texture else { panic!("{:?}", ramps[1]) };
+    assert_eq!(ct.texture_mode, 1);
+    let curve = ct.curve.as_ref().unwrap();
+    assert_eq!((curve.min_value, curve.max_value, curve.bake_resolution), (-1.0, 2.0, 64));
+    assert_eq!(
+        (curve.points[0].right_tangent, curve.points[1].left_tangent, curve.points[1].right_mode),
+        (-1.5, 0.25, 1)
+    );
+    assert_eq!(ramps[0].texture.image().unwrap().format, crate::noise::RampFormat::Rgbaf);
+    assert!(ramps.iter().all(|r| r.texture.generate().is_ok()));
+    // A tangent mode Godot does not have: located at the value.
+    let bad = load_sky_material(&dir.join("bad_curve.tres")).unwrap();
+    let err = bad.settings(bad.check_shader().unwrap().shader.as_ref().unwrap()).unwrap_err();
+    assert!(err.contains("E815") && err.contains("a tangent mode, 0 (free) or 1 (linear), not"), "{err}");
+    assert!(err.contains("bad_curve.tres:6:38"), "{err}");
 }
 
 fn fixture(path: &str) -> std::path::PathBuf {

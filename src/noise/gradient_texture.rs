@@ -137,16 +137,9 @@ fn ramp(gradient: Option<&Gradient>) -> Result<Ramp, NoiseError> {
 
 /// `Color::get_r8`: `int32_t(CLAMP(Math::round(v * 255.0f), 0.0f, 255.0f))`.
 fn to_u8(v: f32) -> u8 {
-    let r = (v * 255.0).round();
-    // CLAMP's comparisons, so a NaN falls through both (and the cast then gives 0, as wasm's
-    // saturating conversion does).
-    (if r < 0.0 {
-        0.0
-    } else if r > 255.0 {
-        255.0
-    } else {
-        r
-    }) as u8
+    // CLAMP keeps a NaN (as `f32::clamp` does), and the cast then gives 0, as wasm's
+    // saturating conversion does.
+    (v * 255.0).round().clamp(0.0, 255.0) as u8
 }
 
 /// Texels from colours: RGBA8 or, with `hdr`, RGBAF.
@@ -282,12 +275,8 @@ impl GradientTexture2D {
         };
         match repeat {
             0 => {
-                // CLAMP(ofs, 0.0, 1.0): its comparisons, so NaN stays NaN.
-                if ofs < 0.0 {
-                    ofs = 0.0
-                } else if ofs > 1.0 {
-                    ofs = 1.0
-                }
+                // CLAMP(ofs, 0.0, 1.0); a NaN stays NaN, as with CLAMP's comparisons.
+                ofs = ofs.clamp(0.0, 1.0);
             }
             1 => {
                 ofs %= 1.0;
@@ -559,6 +548,42 @@ impl CurveTexture {
         let repeat = if format == RampFormat::Rgbf { 3 } else { 1 };
         let data = values.flat_map(|v| std::iter::repeat_n(v.to_le_bytes(), repeat).flatten()).collect();
         Ok(RampImage { width: width as u32, height: 1, format, data })
+    }
+}
+
+/// One of the textures this module generates, as a material gives it.
+#[derive(Clone, Debug, PartialEq)]
+pub enum RampTexture {
+    /// A `GradientTexture1D`.
+    Gradient1D(GradientTexture1D),
+    /// A `GradientTexture2D`.
+    Gradient2D(GradientTexture2D),
+    /// A `CurveTexture`.
+    Curve(CurveTexture),
+}
+
+impl RampTexture {
+    /// Godot's class name.
+    pub fn class(&self) -> &'static str {
+        match self {
+            Self::Gradient1D(_) => "GradientTexture1D",
+            Self::Gradient2D(_) => "GradientTexture2D",
+            Self::Curve(_) => "CurveTexture",
+        }
+    }
+
+    /// The image Godot generates.
+    pub fn image(&self) -> Result<RampImage, NoiseError> {
+        match self {
+            Self::Gradient1D(t) => t.image(),
+            Self::Gradient2D(t) => t.image(),
+            Self::Curve(t) => t.image(),
+        }
+    }
+
+    /// The texture a shader samples ([`RampImage::to_texture`]).
+    pub fn generate(&self) -> Result<skyrun::TextureData, NoiseError> {
+        self.image()?.to_texture()
     }
 }
 

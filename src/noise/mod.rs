@@ -56,7 +56,7 @@ mod warp3d;
 
 pub use gradient::Gradient;
 pub use gradient_texture::{
-    Curve, CurvePoint, CurveTexture, GradientTexture1D, GradientTexture2D, RampFormat, RampImage,
+    Curve, CurvePoint, CurveTexture, GradientTexture1D, GradientTexture2D, RampFormat, RampImage, RampTexture,
 };
 
 use fastnoise_lite as fnl;
