@@ -355,7 +355,8 @@ fn gradient_and_curve_textures_match_godot() {
     let mut table = String::from("| configuration | size | format | max \\|Δ\\| | texels differing |\n");
     table.push_str("| --- | --- | --- | --- | --- |\n");
     for r in &rows {
-        let _ = writeln!(table, "| {} | {} | {} | {} | {} of {} |", r.name, r.size, r.format, r.max, r.texels, r.total);
+        let max = if r.max == 0.0 || r.max >= 1.0 { format!("{}", r.max) } else { format!("{:.2e}", r.max) };
+        let _ = writeln!(table, "| {} | {} | {} | {max} | {} of {} |", r.name, r.size, r.format, r.texels, r.total);
     }
     println!("{table}");
     if let Ok(path) = std::env::var("GDSKY_RAMP_TABLE") {
