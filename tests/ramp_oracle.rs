@@ -5,10 +5,14 @@
 //! curve. The bound is exact (see [`tolerance`] for the exceptions and why); docs/noise.md has
 //! the measured table (`GDSKY_RAMP_TABLE=PATH` writes it).
 //!
-//! Also checked: gdsky's `Default`s are the values a new Godot resource has.
+//! Also checked: gdsky's `Default`s are the values a new Godot resource has; and a material
+//! whose sky samples all three (fixtures/godot_project/materials/moon_ramps.tres) renders in
+//! gdsky like in Godot, each side generating its own textures.
 //!
 //! Needs the oracle (`bash scripts/install-oracle.sh`, which `.ci/run` runs); without it the
 //! test fails with what is missing.
+
+mod common;
 
 use gdsky::noise::{Curve, CurvePoint, CurveTexture, Gradient, GradientTexture1D, GradientTexture2D, RampImage};
 use serde_json::{Map, Value, json};
@@ -401,4 +405,43 @@ fn defaults_are_godots() {
             "max_domain": k.max_domain, "bake_resolution": k.bake_resolution, "point_count": k.points.len(),
         }),
     );
+}
+
+/// The EXR's pixels' 99th percentile and mean of the channels' relative error |a − b| /
+/// max(|b|, 1e-4) (`gdsky compare`'s definition).
+fn rel_stats(a: &Path, b: &Path) -> (f64, f64) {
+    let (a, b) = (skyrun::read_exr(a).expect("an EXR"), skyrun::read_exr(b).expect("an EXR"));
+    let mut rel: Vec<f64> = a
+        .pixels
+        .iter()
+        .zip(&b.pixels)
+        .flat_map(|(p, q)| (0..3).map(move |c| f64::from((p[c] - q[c]).abs()) / f64::from(q[c].abs()).max(1e-4)))
+        .collect();
+    rel.sort_by(f64::total_cmp);
+    let mean = rel.iter().sum::<f64>() / rel.len() as f64;
+    (rel[(rel.len() * 99).div_ceil(100) - 1], mean)
+}
+
+/// materials/moon_ramps.tres (a GradientTexture1D with a cubic Gradient, a CurveTexture with
+/// tangents reaching 1.6, a radial GradientTexture2D moon disc, all sampled with bilinear
+/// filtering) rendered by `gdsky render` on lavapipe and by Godot 4.6 through `gdsky oracle`
+/// (Godot generating the textures from the same properties). Measured: p99 0.71 %, mean 0.17 %
+/// at 256×128 (max 1.56 %, in the upper sky: bilinear filtering of 8-bit texels, SwiftShader's
+/// against lavapipe's, on top of the oracle's 0.57 % recovery). The bound is the issue's, p99 ≤
+/// 1 %.
+#[test]
+fn a_ramp_material_renders_like_godot_through_the_oracle() {
+    let dir = common::scratch("ramp_oracle", "render");
+    let material = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/godot_project/materials/moon_ramps.tres");
+    let material = material.display().to_string();
+    let view = ["--projection", "camera", "--size", "256x128", "--pitch", "20"];
+    let (ours, godot) = (dir.join("gdsky.exr"), dir.join("godot.exr"));
+    for (command, out) in [("render", &ours), ("oracle", &godot)] {
+        let o =
+            common::gdsky(&[&[command, material.as_str()], &view[..], &["-o", &out.display().to_string()]].concat());
+        assert!(o.status.success(), "{command}: {}", common::text(&o));
+    }
+    let (p99, mean) = rel_stats(&ours, &godot);
+    eprintln!("moon_ramps.tres, gdsky against Godot: p99 {p99:.3e}, mean {mean:.3e}");
+    assert!(p99 <= 0.01, "p99 {p99:.3e} over the 1 % parity bound");
 }

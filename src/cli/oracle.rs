@@ -18,8 +18,8 @@ pub struct OracleArgs {
     /// The sky shader to render in Godot; without one, the bundled Freeman sky. `#include` is not
     /// available in the oracle (Godot's Web export has no project files to include). A Godot
     /// material or scene (`MATERIAL.tres`, `SCENE.tscn`) gives its shader, its values (under
-    /// `--set`) and its NoiseTexture2Ds, which Godot generates itself; image textures cannot be
-    /// given to the oracle yet.
+    /// `--set`) and its NoiseTexture2Ds, GradientTexture1D/2Ds and CurveTextures, which Godot
+    /// generates itself; image textures cannot be given to the oracle yet.
     #[arg(value_name = "FILE | MATERIAL.tres | SCENE.tscn")]
     file: Option<PathBuf>,
     /// The EXR to write: the recovered linear COLOR, RGBA 32-bit float (alpha 1), row 0 at the top.
@@ -114,6 +114,9 @@ fn oracle(args: &OracleArgs) -> Result<(), ExitCode> {
     for g in material.iter().flat_map(|m| &m.generated_textures) {
         uniforms.push((g.name.clone(), UniformValue::NoiseTexture2D(noise_spec(&g.texture))));
     }
+    for g in material.iter().flat_map(|m| &m.generated_ramps) {
+        uniforms.push((g.name.clone(), UniformValue::RampTexture(ramp_spec(&g.texture))));
+    }
 
     let mut job = Job::new(code, width, height);
     job.camera = Camera {
@@ -173,6 +176,60 @@ fn start(root: &Path) -> Result<Oracle, ExitCode> {
 
 /// A noise texture as the oracle's property maps: every property gdsky reads, by its Godot name
 /// (Godot then generates the texture itself).
+/// A material's gradient or curve texture as the oracle's JSON property maps (Godot's names),
+/// every property given, so that Godot builds what gdsky generates.
+fn ramp_spec(t: &gdsky::noise::RampTexture) -> skyoracle::RampTextureSpec {
+    use gdsky::noise::RampTexture;
+    use serde_json::{Map, Value, json};
+    let object = |v: Value| match v {
+        Value::Object(map) => map,
+        _ => Map::new(),
+    };
+    let gradient = |g: &Option<gdsky::noise::Gradient>| {
+        g.as_ref().map(|g| {
+            object(json!({
+                "offsets": g.offsets, "colors": g.colors, "interpolation_mode": g.interpolation_mode,
+                "interpolation_color_space": g.interpolation_color_space,
+            }))
+        })
+    };
+    let (texture, gradient, curve) = match t {
+        RampTexture::Gradient1D(t) => (json!({ "width": t.width, "use_hdr": t.use_hdr }), gradient(&t.gradient), None),
+        RampTexture::Gradient2D(t) => (
+            json!({
+                "width": t.width, "height": t.height, "use_hdr": t.use_hdr, "fill": t.fill,
+                "fill_from": t.fill_from, "fill_to": t.fill_to, "repeat": t.repeat,
+            }),
+            gradient(&t.gradient),
+            None,
+        ),
+        RampTexture::Curve(t) => {
+            let curve = t.curve.as_ref().map(|c| {
+                let points: Vec<Value> = c
+                    .points
+                    .iter()
+                    .map(|p| {
+                        json!([
+                            p.position[0],
+                            p.position[1],
+                            p.left_tangent,
+                            p.right_tangent,
+                            p.left_mode,
+                            p.right_mode
+                        ])
+                    })
+                    .collect();
+                object(json!({
+                    "points": points, "min_value": c.min_value, "max_value": c.max_value,
+                    "min_domain": c.min_domain, "max_domain": c.max_domain, "bake_resolution": c.bake_resolution,
+                }))
+            });
+            (json!({ "width": t.width, "texture_mode": t.texture_mode }), None, curve)
+        }
+    };
+    skyoracle::RampTextureSpec { class: t.class().to_string(), texture: object(texture), gradient, curve }
+}
+
 fn noise_spec(t: &gdsky::noise::NoiseTexture2D) -> skyoracle::NoiseTextureSpec {
     use serde_json::{Map, Value, json};
     let object = |v: Value| match v {

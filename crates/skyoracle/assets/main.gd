@@ -153,8 +153,8 @@ func _uniform_value(uniform: Dictionary):
 			for x in v:
 				ints.append(int(x))
 			return ints
-		"noise_texture_2d":
-			# Built (and awaited) by _render: generation takes frames.
+		"noise_texture_2d", "ramp_texture":
+			# Built by _render (a noise texture's generation takes frames).
 			return null
 		"texture_rgbaf":
 			# [width, height, base64 of little-endian f32 RGBA, row 0 first]; the crate checked the
@@ -186,6 +186,11 @@ func _render(job: Dictionary) -> Dictionary:
 			if typeof(made) == TYPE_STRING:
 				return {"error": "uniform %s: %s" % [uniform.get("name"), made]}
 			value = made
+		if str(uniform.get("type")) == "ramp_texture":
+			var built = _generated_ramp(uniform.get("value", {}))
+			if typeof(built) == TYPE_STRING:
+				return {"error": "uniform %s: %s" % [uniform.get("name"), built]}
+			value = built
 		if value == null:
 			return {"error": "uniform %s: unsupported type %s, or texture data that does not match its size" % [uniform.get("name"), uniform.get("type")]}
 		material.set_shader_parameter(str(uniform.get("name")), value)

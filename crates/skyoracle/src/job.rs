@@ -98,6 +98,9 @@ pub enum UniformValue {
     /// A `sampler2D` bound to a `NoiseTexture2D` that Godot itself generates from these
     /// properties (see [`crate::NoiseTextureSpec`]); the render waits until it has.
     NoiseTexture2D(crate::NoiseTextureSpec),
+    /// A `sampler2D` bound to a `GradientTexture1D`, `GradientTexture2D` or `CurveTexture` that
+    /// Godot builds from these properties (see [`crate::RampTextureSpec`]).
+    RampTexture(crate::RampTextureSpec),
 }
 
 /// The largest side of a [`UniformValue::TextureRgbaF32`]: a 4096² RGBA f32 texture is 256 MiB,
@@ -126,6 +129,7 @@ impl UniformValue {
                 ("texture_rgbaf", json!([width, height, data]))
             }
             Self::NoiseTexture2D(spec) => ("noise_texture_2d", spec.to_json()),
+            Self::RampTexture(spec) => ("ramp_texture", spec.to_json()),
         }
     }
 

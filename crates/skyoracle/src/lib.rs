@@ -178,7 +178,8 @@
 //!
 //! [`Oracle::ramp_image`] does the same for a `GradientTexture1D`, `GradientTexture2D` or
 //! `CurveTexture` ([`RampTextureSpec`], with its `Gradient` or `Curve`), returning the image in
-//! Godot's format (RGBA8, RGBAF with `use_hdr`, RGBF or RF for a curve).
+//! Godot's format (RGBA8, RGBAF with `use_hdr`, RGBF or RF for a curve), and
+//! [`UniformValue::RampTexture`] binds one to a `sampler2D` in a render job.
 //!
 //! ## Compile checks
 //!

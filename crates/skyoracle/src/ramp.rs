@@ -28,6 +28,12 @@ pub struct RampTextureSpec {
     pub curve: Option<Map<String, Value>>,
 }
 
+impl RampTextureSpec {
+    pub(crate) fn to_json(&self) -> Value {
+        json!({ "class": self.class, "texture": self.texture, "gradient": self.gradient, "curve": self.curve })
+    }
+}
+
 /// What Godot generated.
 #[derive(Clone, Debug, PartialEq)]
 pub struct GodotRampImage {
@@ -50,10 +56,7 @@ pub struct GodotRampImage {
 impl Oracle {
     /// Has Godot build the texture `spec` describes and returns its image (`get_image()`).
     pub fn ramp_image(&mut self, spec: &RampTextureSpec) -> Result<GodotRampImage, OracleError> {
-        let message = json!({
-            "op": "ramp",
-            "spec": { "class": spec.class, "texture": spec.texture, "gradient": spec.gradient, "curve": spec.curve },
-        });
+        let message = json!({ "op": "ramp", "spec": spec.to_json() });
         let (reply, _log) = self.exchange(message, Duration::from_secs(60), "a gradient/curve texture job")?;
         Self::refusal(&reply)?;
         let size = |name: &str| reply.get(name).and_then(Value::as_u64).and_then(|v| u32::try_from(v).ok());
