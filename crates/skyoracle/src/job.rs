@@ -381,6 +381,24 @@ mod tests {
     }
 
     #[test]
+    fn ramp_texture_travels_as_its_class_and_properties() {
+        let mut spec = crate::RampTextureSpec { class: "CurveTexture".into(), ..Default::default() };
+        spec.texture.insert("texture_mode".into(), json!(1));
+        spec.curve = Some(serde_json::Map::from_iter([("points".to_string(), json!([[0.0, 1.0, 0.0, 0.0, 0, 0]]))]));
+        let plain = Job::new("shader_type sky;", 4, 2);
+        let job = Job { uniforms: vec![("c".into(), UniformValue::RampTexture(spec))], ..plain.clone() };
+        let uniform = &job.to_json(1)["uniforms"][0];
+        assert_eq!(uniform["type"], "ramp_texture");
+        assert_eq!(uniform["value"]["class"], "CurveTexture");
+        assert_eq!(uniform["value"]["texture"]["texture_mode"], 1);
+        assert_eq!(uniform["value"]["curve"]["points"][0][1], 1.0);
+        assert_eq!(uniform["value"]["gradient"], Value::Null);
+        // Built synchronously: no time added.
+        assert_eq!(job.time_allowed(), plain.time_allowed());
+        assert_eq!(job.validate(), Ok(()));
+    }
+
+    #[test]
     fn texture_travels_as_base64_of_little_endian_f32() {
         let texels = vec![[1.0, -2.5, 1e-30, 3.4e38], [0.0, 0.5, 65504.0, 1.0]];
         let json = texture(2, 1, texels.clone()).to_json(7);
