@@ -14,7 +14,9 @@
 
 mod common;
 
-use gdsky::noise::{Curve, CurvePoint, CurveTexture, Gradient, GradientTexture1D, GradientTexture2D, RampImage};
+use gdsky::noise::{
+    Curve, CurvePoint, CurveTexture, CurveXyzTexture, Gradient, GradientTexture1D, GradientTexture2D, RampImage,
+};
 use serde_json::{Map, Value, json};
 use skyoracle::{GodotRampImage, Oracle, RampTextureSpec};
 use std::fmt::Write as _;
@@ -52,6 +54,7 @@ enum Case {
     G1(GradientTexture1D),
     G2(GradientTexture2D),
     C(CurveTexture),
+    Xyz(CurveXyzTexture),
 }
 
 impl Case {
@@ -61,7 +64,7 @@ impl Case {
                 class: "GradientTexture1D".into(),
                 texture: object(json!({ "width": t.width, "use_hdr": t.use_hdr })),
                 gradient: t.gradient.as_ref().map(gradient_json),
-                curve: None,
+                ..Default::default()
             },
             Case::G2(t) => RampTextureSpec {
                 class: "GradientTexture2D".into(),
@@ -70,13 +73,19 @@ impl Case {
                     "fill_from": t.fill_from, "fill_to": t.fill_to, "repeat": t.repeat,
                 })),
                 gradient: t.gradient.as_ref().map(gradient_json),
-                curve: None,
+                ..Default::default()
             },
             Case::C(t) => RampTextureSpec {
                 class: "CurveTexture".into(),
                 texture: object(json!({ "width": t.width, "texture_mode": t.texture_mode })),
-                gradient: None,
                 curve: t.curve.as_ref().map(curve_json),
+                ..Default::default()
+            },
+            Case::Xyz(t) => RampTextureSpec {
+                class: "CurveXYZTexture".into(),
+                texture: object(json!({ "width": t.width })),
+                curves_xyz: t.curves.clone().map(|c| c.as_ref().map(curve_json)),
+                ..Default::default()
             },
         }
     }
@@ -86,6 +95,7 @@ impl Case {
             Case::G1(t) => t.image(),
             Case::G2(t) => t.image(),
             Case::C(t) => t.image(),
+            Case::Xyz(t) => t.image(),
         }
         .unwrap_or_else(|e| panic!("gdsky refused the texture: {e}"))
     }
@@ -266,6 +276,9 @@ fn configurations() -> Vec<(String, Case)> {
         out.push((format!("curve 3 points, width {width}"), Case::C(t)));
     }
     out.push(("curve texture without a curve".into(), Case::C(CurveTexture::default())));
+    let all = curves();
+    let xyz = CurveXyzTexture { curves: [Some(all[1].1.clone()), None, Some(all[4].1.clone())], width: 64 };
+    out.push(("CurveXYZ: 3 points, none, domain −1 … 2".into(), Case::Xyz(xyz)));
     out
 }
 
@@ -397,6 +410,7 @@ fn defaults_are_godots() {
     );
     let c = CurveTexture::default();
     check("CurveTexture", json!({ "width": c.width, "texture_mode": c.texture_mode }));
+    check("CurveXYZTexture", json!({ "width": CurveXyzTexture::default().width }));
     let k = Curve::default();
     check(
         "Curve",

@@ -18,7 +18,7 @@ pub struct OracleArgs {
     /// The sky shader to render in Godot; without one, the bundled Freeman sky. `#include` is not
     /// available in the oracle (Godot's Web export has no project files to include). A Godot
     /// material or scene (`MATERIAL.tres`, `SCENE.tscn`) gives its shader, its values (under
-    /// `--set`) and its NoiseTexture2Ds, GradientTexture1D/2Ds and CurveTextures, which Godot
+    /// `--set`) and its NoiseTexture2Ds, gradient and curve textures, which Godot
     /// generates itself; image textures cannot be given to the oracle yet.
     #[arg(value_name = "FILE | MATERIAL.tres | SCENE.tscn")]
     file: Option<PathBuf>,
@@ -193,41 +193,45 @@ fn ramp_spec(t: &gdsky::noise::RampTexture) -> skyoracle::RampTextureSpec {
             }))
         })
     };
-    let (texture, gradient, curve) = match t {
-        RampTexture::Gradient1D(t) => (json!({ "width": t.width, "use_hdr": t.use_hdr }), gradient(&t.gradient), None),
-        RampTexture::Gradient2D(t) => (
+    let curve = |c: &Option<gdsky::noise::Curve>| {
+        c.as_ref().map(|c| {
+            let points: Vec<Value> = c
+                .points
+                .iter()
+                .map(|p| {
+                    json!([p.position[0], p.position[1], p.left_tangent, p.right_tangent, p.left_mode, p.right_mode])
+                })
+                .collect();
+            object(json!({
+                "points": points, "min_value": c.min_value, "max_value": c.max_value,
+                "min_domain": c.min_domain, "max_domain": c.max_domain, "bake_resolution": c.bake_resolution,
+            }))
+        })
+    };
+    let mut spec = skyoracle::RampTextureSpec { class: t.class().to_string(), ..Default::default() };
+    let texture = match t {
+        RampTexture::Gradient1D(t) => {
+            spec.gradient = gradient(&t.gradient);
+            json!({ "width": t.width, "use_hdr": t.use_hdr })
+        }
+        RampTexture::Gradient2D(t) => {
+            spec.gradient = gradient(&t.gradient);
             json!({
                 "width": t.width, "height": t.height, "use_hdr": t.use_hdr, "fill": t.fill,
                 "fill_from": t.fill_from, "fill_to": t.fill_to, "repeat": t.repeat,
-            }),
-            gradient(&t.gradient),
-            None,
-        ),
+            })
+        }
         RampTexture::Curve(t) => {
-            let curve = t.curve.as_ref().map(|c| {
-                let points: Vec<Value> = c
-                    .points
-                    .iter()
-                    .map(|p| {
-                        json!([
-                            p.position[0],
-                            p.position[1],
-                            p.left_tangent,
-                            p.right_tangent,
-                            p.left_mode,
-                            p.right_mode
-                        ])
-                    })
-                    .collect();
-                object(json!({
-                    "points": points, "min_value": c.min_value, "max_value": c.max_value,
-                    "min_domain": c.min_domain, "max_domain": c.max_domain, "bake_resolution": c.bake_resolution,
-                }))
-            });
-            (json!({ "width": t.width, "texture_mode": t.texture_mode }), None, curve)
+            spec.curve = curve(&t.curve);
+            json!({ "width": t.width, "texture_mode": t.texture_mode })
+        }
+        RampTexture::CurveXyz(t) => {
+            spec.curves_xyz = [curve(&t.curves[0]), curve(&t.curves[1]), curve(&t.curves[2])];
+            json!({ "width": t.width })
         }
     };
-    skyoracle::RampTextureSpec { class: t.class().to_string(), texture: object(texture), gradient, curve }
+    spec.texture = object(texture);
+    spec
 }
 
 fn noise_spec(t: &gdsky::noise::NoiseTexture2D) -> skyoracle::NoiseTextureSpec {

@@ -49,8 +49,8 @@ pub enum TextureSource {
     /// A `NoiseTexture2D` or `NoiseTexture3D` and the resources it refers to, generated when
     /// the texture is read.
     Noise(Box<NoiseSections>),
-    /// A `GradientTexture1D`, `GradientTexture2D` or `CurveTexture` and its `Gradient` or
-    /// `Curve`, generated when the texture is read.
+    /// A `GradientTexture1D`, `GradientTexture2D`, `CurveTexture` or `CurveXYZTexture` and its
+    /// `Gradient` or `Curve`s, generated when the texture is read.
     Ramp(Box<RampSections>),
 }
 
@@ -65,8 +65,9 @@ pub struct RampSections {
     pub texture: Section,
     /// The `Gradient` section, when `gradient` is set.
     pub gradient: Option<Section>,
-    /// The `Curve` section, when `curve` is set.
-    pub curve: Option<Section>,
+    /// The `Curve` sections: a `CurveTexture`'s `curve` first, or a `CurveXYZTexture`'s
+    /// `curve_x`, `curve_y`, `curve_z`; `None` where unset.
+    pub curves: [Option<Section>; 3],
 }
 
 /// A `NoiseTexture2D` (or `NoiseTexture3D`) section and the sections of its `noise` (a
@@ -597,18 +598,20 @@ impl Loader {
             Ok(Some(target_section))
         };
         match ty.as_str() {
-            "GradientTexture1D" | "GradientTexture2D" | "CurveTexture" => {
-                let (gradient, curve) = if ty == "CurveTexture" {
-                    (None, linked("curve", "Curve")?)
-                } else {
-                    (linked("gradient", "Gradient")?, None)
+            "GradientTexture1D" | "GradientTexture2D" | "CurveTexture" | "CurveXYZTexture" => {
+                let (gradient, curves) = match ty.as_str() {
+                    "CurveTexture" => (None, [linked("curve", "Curve")?, None, None]),
+                    "CurveXYZTexture" => {
+                        (None, [linked("curve_x", "Curve")?, linked("curve_y", "Curve")?, linked("curve_z", "Curve")?])
+                    }
+                    _ => (linked("gradient", "Gradient")?, [None, None, None]),
                 };
                 Ok(TextureSource::Ramp(Box::new(RampSections {
                     file: tfile,
                     class: ty.clone(),
                     texture: section.clone(),
                     gradient,
-                    curve,
+                    curves,
                 })))
             }
             "NoiseTexture2D" | "NoiseTexture3D" => {
@@ -628,7 +631,7 @@ impl Loader {
                     .with_secondary(tfile, section.span.clone(), "defined here")
                     .with_note(
                         "textures gdsky reads: PNG and OpenEXR image files by path, NoiseTexture2D, NoiseTexture3D, \
-                         GradientTexture1D, GradientTexture2D and CurveTexture",
+                         GradientTexture1D, GradientTexture2D, CurveTexture and CurveXYZTexture",
                     ),
             )),
         }
@@ -794,8 +797,7 @@ fn push_texture(out: &mut MaterialSettings, name: &str, source: &TextureSource, 
             out.textures.push(TextureSetting { name: name.to_string(), path: path.clone(), span })
         }
         TextureSource::Ramp(r) => {
-            let texture =
-                super::ramp::ramp_texture(r.file, &r.class, &r.texture, r.gradient.as_ref(), r.curve.as_ref())?;
+            let texture = super::ramp::ramp_texture(r.file, &r.class, &r.texture, r.gradient.as_ref(), &r.curves)?;
             out.generated_ramps.push(GeneratedRamp { name: name.to_string(), texture, span })
         }
         TextureSource::Noise(n) if n.volume => {

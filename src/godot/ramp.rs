@@ -5,7 +5,9 @@
 use super::codes;
 use super::noise::{boolean, float, gradient, int, numbers, wrong};
 use super::text::{Entry, Section, ValueKind};
-use crate::noise::{Curve, CurvePoint, CurveTexture, GradientTexture1D, GradientTexture2D, RampTexture};
+use crate::noise::{
+    Curve, CurvePoint, CurveTexture, CurveXyzTexture, GradientTexture1D, GradientTexture2D, RampTexture,
+};
 use gdshader::diag::{Diagnostic, FileId};
 
 /// A `Vector2` property.
@@ -16,16 +18,17 @@ fn vector2(file: FileId, e: &Entry) -> Result<[f64; 2], Diagnostic> {
     }
 }
 
-/// The texture of class `class` (in `file`), its `gradient` or `curve` already followed to its
-/// section. A gradient texture without a gradient gets Godot's new default one only when the
+/// The texture of class `class` (in `file`), its `gradient` or curves (`curve`, or a
+/// `CurveXYZTexture`'s `curve_x`, `curve_y`, `curve_z`) already followed to their sections. A gradient texture without a gradient gets Godot's new default one only when the
 /// editor made it; a file without one makes no image in Godot, which the generation refuses.
 pub fn ramp_texture(
     file: FileId,
     class: &str,
     texture: &Section,
     gradient_section: Option<&Section>,
-    curve_section: Option<&Section>,
+    curve_sections: &[Option<Section>; 3],
 ) -> Result<RampTexture, Diagnostic> {
+    let curve_section = curve_sections[0].as_ref();
     let g = gradient_section.map(|s| gradient(file, s)).transpose()?;
     Ok(match class {
         "GradientTexture1D" => {
@@ -54,6 +57,19 @@ pub fn ramp_texture(
                 }
             }
             RampTexture::Gradient2D(t)
+        }
+        "CurveXYZTexture" => {
+            let mut curves = [None, None, None];
+            for (c, s) in curves.iter_mut().zip(curve_sections) {
+                *c = s.as_ref().map(|s| curve(file, s)).transpose()?;
+            }
+            let mut t = CurveXyzTexture { curves, ..Default::default() };
+            for e in &texture.properties {
+                if e.name == "width" {
+                    t.width = int(file, e)?;
+                }
+            }
+            RampTexture::CurveXyz(t)
         }
         _ => {
             let mut t =

@@ -371,9 +371,9 @@ fn material_errors_are_located_in_the_file_that_holds_them() {
                   shader_parameter/clouds = ExtResource(\"2\")\n",
             ),
             (
-                "curve_xyz.tres",
+                "image_texture.tres",
                 b"[gd_resource type=\"ShaderMaterial\" format=3]\n\n[ext_resource type=\"Shader\" path=\"res://sky.gdshader\" id=\"1\"]\n\
-                  [sub_resource type=\"CurveXYZTexture\" id=\"G\"]\n\n[resource]\nshader = ExtResource(\"1\")\n\
+                  [sub_resource type=\"ImageTexture\" id=\"G\"]\n\n[resource]\nshader = ExtResource(\"1\")\n\
                   shader_parameter/clouds = SubResource(\"G\")\n",
             ),
             (
@@ -395,7 +395,7 @@ fn material_errors_are_located_in_the_file_that_holds_them() {
         "procedural.tres",
         "no_env.tscn",
         "jpg.tres",
-        "curve_xyz.tres",
+        "image_texture.tres",
         "missing_id.tres",
         "not_utf8.tres",
         "format4.tres",

@@ -531,13 +531,7 @@ impl Default for CurveTexture {
 impl CurveTexture {
     /// The image Godot generates (`CurveTexture::_update`).
     pub fn image(&self) -> Result<RampImage, NoiseError> {
-        if !(32..=4096).contains(&self.width) {
-            return Err(out_of_range(
-                "width",
-                format!("{} is outside 32 … 4096 (Godot ignores it and keeps the previous width)", self.width),
-            ));
-        }
-        let width = self.width as usize;
+        let width = curve_width(self.width)?;
         let format = match self.texture_mode {
             0 => RampFormat::Rgbf,
             1 => RampFormat::Rf,
@@ -551,6 +545,52 @@ impl CurveTexture {
     }
 }
 
+/// Godot's `CurveXYZTexture`: three curves baked into r, g and b.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CurveXyzTexture {
+    /// `curve_x`, `curve_y`, `curve_z`; a missing one gives zeros in its channel.
+    pub curves: [Option<Curve>; 3],
+    /// `width` (32 … 4096, default 256).
+    pub width: i64,
+}
+
+impl Default for CurveXyzTexture {
+    /// A new Godot `CurveXYZTexture`.
+    fn default() -> Self {
+        Self { curves: [None, None, None], width: 256 }
+    }
+}
+
+impl CurveXyzTexture {
+    /// The image Godot generates (`CurveXYZTexture::_update`): `FORMAT_RGBF`, channel c of
+    /// texel i the c-th curve's `sample_baked(i / width)`.
+    pub fn image(&self) -> Result<RampImage, NoiseError> {
+        let width = curve_width(self.width)?;
+        let baked: Vec<Option<Baked>> =
+            self.curves.iter().map(|c| c.as_ref().map(Baked::new).transpose()).collect::<Result<_, _>>()?;
+        let data = (0..width)
+            .flat_map(|i| {
+                let t = i as f32 / width as f32;
+                baked.iter().map(move |b| b.as_ref().map_or(0.0, |b| b.sample_baked(t)))
+            })
+            .flat_map(f32::to_le_bytes)
+            .collect();
+        Ok(RampImage { width: width as u32, height: 1, format: RampFormat::Rgbf, data })
+    }
+}
+
+/// A curve texture's width, in Godot's setter range.
+fn curve_width(width: i64) -> Result<usize, NoiseError> {
+    if (32..=4096).contains(&width) {
+        Ok(width as usize)
+    } else {
+        Err(out_of_range(
+            "width",
+            format!("{width} is outside 32 … 4096 (Godot ignores it and keeps the previous width)"),
+        ))
+    }
+}
+
 /// One of the textures this module generates, as a material gives it.
 #[derive(Clone, Debug, PartialEq)]
 pub enum RampTexture {
@@ -560,6 +600,8 @@ pub enum RampTexture {
     Gradient2D(GradientTexture2D),
     /// A `CurveTexture`.
     Curve(CurveTexture),
+    /// A `CurveXYZTexture`.
+    CurveXyz(CurveXyzTexture),
 }
 
 impl RampTexture {
@@ -569,6 +611,7 @@ impl RampTexture {
             Self::Gradient1D(_) => "GradientTexture1D",
             Self::Gradient2D(_) => "GradientTexture2D",
             Self::Curve(_) => "CurveTexture",
+            Self::CurveXyz(_) => "CurveXYZTexture",
         }
     }
 
@@ -578,6 +621,7 @@ impl RampTexture {
             Self::Gradient1D(t) => t.image(),
             Self::Gradient2D(t) => t.image(),
             Self::Curve(t) => t.image(),
+            Self::CurveXyz(t) => t.image(),
         }
     }
 

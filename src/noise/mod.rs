@@ -56,7 +56,8 @@ mod warp3d;
 
 pub use gradient::Gradient;
 pub use gradient_texture::{
-    Curve, CurvePoint, CurveTexture, GradientTexture1D, GradientTexture2D, RampFormat, RampImage, RampTexture,
+    Curve, CurvePoint, CurveTexture, CurveXyzTexture, GradientTexture1D, GradientTexture2D, RampFormat, RampImage,
+    RampTexture,
 };
 
 use fastnoise_lite as fnl;

@@ -411,7 +411,7 @@ func _noise(job: Dictionary) -> Dictionary:
 ## {...}, "gradient": {...} or null, "curve": {...} or null}; or an error message.
 func _generated_ramp(spec: Dictionary):
 	var name := str(spec.get("class", ""))
-	if not name in ["GradientTexture1D", "GradientTexture2D", "CurveTexture"]:
+	if not name in ["GradientTexture1D", "GradientTexture2D", "CurveTexture", "CurveXYZTexture"]:
 		return "the oracle does not build a %s" % name
 	var texture = ClassDB.instantiate(name)
 	var error := ""
@@ -423,9 +423,10 @@ func _generated_ramp(spec: Dictionary):
 		if error != "":
 			return error
 		texture.gradient = gradient
-	var c = spec.get("curve")
-	if typeof(c) == TYPE_DICTIONARY:
-		texture.curve = _curve(c)
+	for key in ["curve", "curve_x", "curve_y", "curve_z"]:
+		var c = spec.get(key)
+		if typeof(c) == TYPE_DICTIONARY:
+			texture.set(key, _curve(c))
 	error = _set_properties(texture, spec.get("texture", {}), [])
 	if error != "":
 		return error
@@ -478,6 +479,14 @@ func _ramp(job: Dictionary) -> Dictionary:
 			image = Image.create_empty(t.width, 1, false, Image.FORMAT_RGBAF)
 			for i in t.width:
 				image.set_pixel(i, 0, t.gradient.sample(i / float(t.width - 1)))
+	elif made is CurveXYZTexture:
+		# As for a CurveTexture: CurveXYZTexture::_update's sample_baked calls, in RGBF.
+		var t: CurveXYZTexture = made
+		var values := PackedFloat32Array()
+		for i in t.width:
+			for curve in [t.curve_x, t.curve_y, t.curve_z]:
+				values.append(0.0 if curve == null else curve.sample_baked(i / float(t.width)))
+		image = Image.create_from_data(t.width, 1, false, Image.FORMAT_RGBF, values.to_byte_array())
 	else:
 		# A GradientTexture2D with use_hdr comes back through 8-bit pixels (see above); the
 		# reply says so, and its offsets are not reachable from GDScript.

@@ -14,7 +14,7 @@ use crate::{Oracle, OracleError};
 /// A gradient or curve texture as Godot's properties.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct RampTextureSpec {
-    /// `GradientTexture1D`, `GradientTexture2D` or `CurveTexture`.
+    /// `GradientTexture1D`, `GradientTexture2D`, `CurveTexture` or `CurveXYZTexture`.
     pub class: String,
     /// The texture's properties other than `gradient` / `curve` (`width`, `height`, `use_hdr`,
     /// `fill`, `fill_from` and `fill_to` as `[x, y]`, `repeat`, `texture_mode`).
@@ -26,11 +26,16 @@ pub struct RampTextureSpec {
     /// …]`, `min_value`, `max_value`, `min_domain`, `max_domain`, `bake_resolution`. `main.gd`
     /// sets them as loading a `.tres` does (`_limits`, then `_data`: tangents kept as given).
     pub curve: Option<Map<String, Value>>,
+    /// A `CurveXYZTexture`'s `curve_x`, `curve_y` and `curve_z`, each as [`Self::curve`].
+    pub curves_xyz: [Option<Map<String, Value>>; 3],
 }
 
 impl RampTextureSpec {
     pub(crate) fn to_json(&self) -> Value {
-        json!({ "class": self.class, "texture": self.texture, "gradient": self.gradient, "curve": self.curve })
+        json!({
+            "class": self.class, "texture": self.texture, "gradient": self.gradient, "curve": self.curve,
+            "curve_x": self.curves_xyz[0], "curve_y": self.curves_xyz[1], "curve_z": self.curves_xyz[2],
+        })
     }
 }
 
