@@ -228,3 +228,28 @@ fn a_noise_material_renders_like_godot_through_the_oracle() {
     eprintln!("noise_clouds.tres, gdsky against Godot: p99 {p99:.3e}");
     assert!(p99 <= 0.01, "p99 {p99:.3e} over the 1 % parity bound");
 }
+
+/// materials/star_field.tres reads a NoiseTexture2D of independent texels at SKY_COORDS with
+/// nearest filtering, so a pixel's colour depends on which texel its SKY_COORDS falls in. Godot
+/// 4.6 (the oracle) computes SKY_COORDS with approximate trigonometry; `--sky-coords godot46`
+/// does the same and matches it within the parity bound, while the exact SKY_COORDS (the
+/// default, Godot 4.3–4.5's) lands on other texels in many pixels. Needs the oracle.
+#[test]
+fn godot46_sky_coords_match_the_oracle_on_a_star_field() {
+    let dir = scratch("godot_materials", "sky_coords");
+    let material = fixture("materials/star_field.tres");
+    let view = ["--projection", "camera", "--size", "128x64", "--pitch", "35"];
+    let godot = dir.join("godot.exr");
+    ok(gdsky(&[&["oracle", material.as_str()], &view[..], &["-o", &godot.display().to_string()]].concat()));
+    let render = |coords: &str| {
+        let out = dir.join(format!("gdsky-{coords}.exr"));
+        let args =
+            [&["render", material.as_str()], &view[..], &["--sky-coords", coords, "-o", &out.display().to_string()]];
+        ok(gdsky(&args.concat()));
+        p99_rel(&out, &godot)
+    };
+    let (approx, exact) = (render("godot46"), render("exact"));
+    eprintln!("star field against Godot 4.6: p99 {approx:.3e} with godot46 SKY_COORDS, {exact:.3e} exact");
+    assert!(approx <= 0.01, "godot46 SKY_COORDS: p99 {approx:.3e} over the 1 % parity bound");
+    assert!(exact > 0.05, "exact SKY_COORDS should land on other texels somewhere: p99 {exact:.3e}");
+}

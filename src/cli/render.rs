@@ -53,6 +53,10 @@ pub struct RenderArgs {
     /// use_debanding` (docs/godot.md, "Debanding"); `none` leaves COLOR as the shader writes it.
     #[arg(long, value_enum, default_value_t = super::debanding::DebandingArg::None)]
     debanding: super::debanding::DebandingArg,
+    /// How SKY_COORDS is computed: `exact` (Godot 4.3–4.5) or `godot46`, Godot 4.6's
+    /// approximate trigonometry (what the oracle's Godot computes; docs/godot.md).
+    #[arg(long, value_enum, default_value_t = super::debanding::SkyCoordsArg::Exact)]
+    sky_coords: super::debanding::SkyCoordsArg,
 }
 
 pub fn run(args: &RenderArgs, matches: &ArgMatches) -> ExitCode {
@@ -89,7 +93,7 @@ fn render(args: &RenderArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
         }
     })?;
     check_scene_uniforms(input.scene.as_ref(), &loaded)?;
-    super::debanding::apply(&mut loaded, args.debanding)?;
+    super::debanding::apply(&mut loaded, args.debanding, args.sky_coords)?;
     loaded.textures = scene_args.textures(input.scene.as_ref(), &loaded)?;
     if args.bake_scene {
         let mut names: Vec<&String> = loaded.baked.keys().collect();

@@ -31,7 +31,7 @@ pub mod wrapper;
 pub use emit::{EmitError, exact_arithmetic, reread_wgsl, to_spirv, to_wgsl};
 pub use lower::{GLOBAL_UNIFORM_GROUP, MATERIAL_GROUP, TextureSlot, UniformSlot};
 pub use widen::{F64_MATH_WGSL, F64Output};
-pub use wrapper::{Debanding, Projection};
+pub use wrapper::{Debanding, Projection, SkyCoords};
 
 use gdshader::parse::ast;
 use gdshader::{Diagnostic, FrontendOutput};
@@ -84,7 +84,7 @@ pub fn lower_with(front: &FrontendOutput, baked: &HashMap<String, String>) -> Re
     // The lowering recurses over the expression tree, which the front end lets grow to
     // `MAX_EXPR_DEPTH` (a chain of 2,048 operators): it gets the front end's deep stack rather
     // than whatever thread called it (a test thread has 2 MiB).
-    on_lowering_thread(|| lower_here(front, baked, Debanding::None))?
+    on_lowering_thread(|| lower_here(front, baked, Debanding::None, SkyCoords::Exact))?
 }
 
 /// Runs `f` on a thread with the lowering's deep stack.
@@ -115,8 +115,9 @@ pub fn lower_f64(
     baked: &HashMap<String, String>,
     output: F64Output,
 ) -> Result<Lowered, Vec<Diagnostic>> {
-    let (lowered, exact) =
-        on_lowering_thread(|| (lower_here(front, baked, Debanding::None), lower::take_exact_floats()))?;
+    let (lowered, exact) = on_lowering_thread(|| {
+        (lower_here(front, baked, Debanding::None, SkyCoords::Exact), lower::take_exact_floats())
+    })?;
     let lowered = lowered?;
     let module = widen::widen(&lowered.module, &lowered.info, &exact, output).map_err(|why| {
         vec![Diagnostic::error(UNSUPPORTED, format!("the f64 evaluation cannot widen this shader: {why}"))]
@@ -133,6 +134,7 @@ fn lower_here(
     front: &FrontendOutput,
     baked: &HashMap<String, String>,
     debanding: Debanding,
+    sky_coords: SkyCoords,
 ) -> Result<Lowered, Vec<Diagnostic>> {
     let Some(shader) = front.shader.as_ref() else {
         return Err(front.diagnostics.clone());
@@ -163,6 +165,7 @@ fn lower_here(
     }
     let mut lw = lower::Lowerer::new(shader, values);
     lw.debanding = debanding;
+    lw.sky_coords = sky_coords;
     lw.items();
     if !lw.errors.is_empty() {
         return Err(lw
@@ -218,7 +221,20 @@ pub fn lower_with_options(
     overrides: &[String],
     debanding: Debanding,
 ) -> Result<Lowered, Vec<Diagnostic>> {
-    let mut lowered = on_lowering_thread(|| lower_here(front, baked, debanding))??;
+    lower_for_godot(front, baked, overrides, debanding, SkyCoords::Exact)
+}
+
+/// [`lower_with_options`], with SKY_COORDS computed as `sky_coords` says ([`SkyCoords::Godot46`]:
+/// Godot 4.6's approximate trigonometry). A shader that does not read SKY_COORDS lowers to the
+/// same module either way.
+pub fn lower_for_godot(
+    front: &FrontendOutput,
+    baked: &HashMap<String, String>,
+    overrides: &[String],
+    debanding: Debanding,
+    sky_coords: SkyCoords,
+) -> Result<Lowered, Vec<Diagnostic>> {
+    let mut lowered = on_lowering_thread(|| lower_here(front, baked, debanding, sky_coords))??;
     if overrides.is_empty() {
         return Ok(lowered);
     }

@@ -77,6 +77,25 @@ pub enum Debanding {
     Godot,
 }
 
+/// How the wrapper computes SKY_COORDS from EYEDIR.
+///
+/// Godot 4.3–4.5 use exact `atan2`/`acos` (the design's reference, and the default). Godot 4.6
+/// (both renderers' sky.glsl, including the Compatibility renderer the oracle runs) uses
+/// polynomial approximations, Eberly's (`acos_approx`: (π/2 − 0.156583·|x|)·√(1 − |x|), mirrored
+/// for x < 0; `atan2_approx`: a·(1 + s·(−0.301895 + 0.0872929·s)) with a = min/max of |x|, |y|,
+/// s = a², then the octant folds), which move SKY_COORDS by up to 2.9e-3 in v and 2.2e-4 in u
+/// (measured through the oracle, docs/godot.md). A texture of independent texels sampled at
+/// SKY_COORDS (a hashed star field) lands on other texels; [`SkyCoords::Godot46`] reproduces
+/// Godot 4.6's values.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum SkyCoords {
+    /// `atan2(d.x, −d.z) / 2π` wrapped to [0, 1), `acos(d.y) / π`.
+    #[default]
+    Exact,
+    /// Godot 4.6's `atan2_approx` and `acos_approx`, in its order of operations.
+    Godot46,
+}
+
 /// The per-pixel built-ins, which live in private globals.
 const PRIVATES: [(&str, &str); 9] = [
     ("HALF_RES_COLOR", "vec4"),
@@ -468,13 +487,31 @@ fn fragment(lw: &mut Lowerer, global: Handle<GlobalVariable>, projection: Projec
         let dy = b.expr(E::AccessIndex { base: dir, index: 1 }, sp);
         let dz = b.expr(E::AccessIndex { base: dir, index: 2 }, sp);
         let ndz = b.expr(E::Unary { op: naga::UnaryOperator::Negate, expr: dz }, sp);
-        let a = math(&mut b, Mf::Atan2, &[dx, ndz]);
-        let tau = f(&mut b, 2.0 * PI);
-        let su = bin(&mut b, Bo::Divide, a, tau);
-        let su = math(&mut b, Mf::Fract, &[su]);
-        let ac = math(&mut b, Mf::Acos, &[dy]);
-        let pi = f(&mut b, PI);
-        let sv = bin(&mut b, Bo::Divide, ac, pi);
+        let (su, sv) = match lw.sky_coords {
+            SkyCoords::Exact => {
+                let a = math(&mut b, Mf::Atan2, &[dx, ndz]);
+                let tau = f(&mut b, 2.0 * PI);
+                let su = bin(&mut b, Bo::Divide, a, tau);
+                let su = math(&mut b, Mf::Fract, &[su]);
+                let ac = math(&mut b, Mf::Acos, &[dy]);
+                let pi = f(&mut b, PI);
+                (su, bin(&mut b, Bo::Divide, ac, pi))
+            }
+            SkyCoords::Godot46 => {
+                // panorama_coords = (atan2_approx(x, −z), acos_approx(y)); x += 2π where < 0;
+                // then divided by (2π, π).
+                let a = atan2_approx(&mut b, dx, ndz);
+                let zero = f(&mut b, 0.0);
+                let negative = bin(&mut b, Bo::Less, a, zero);
+                let tau = f(&mut b, 2.0 * PI);
+                let wrapped = bin(&mut b, Bo::Add, a, tau);
+                let a = b.expr(E::Select { condition: negative, accept: wrapped, reject: a }, sp);
+                let su = bin(&mut b, Bo::Divide, a, tau);
+                let ac = acos_approx(&mut b, dy);
+                let pi = f(&mut b, PI);
+                (su, bin(&mut b, Bo::Divide, ac, pi))
+            }
+        };
         let coords = b.expr(E::Compose { ty: v2t, components: vec![su, sv] }, sp);
         set(lw, &mut b, "SKY_COORDS", coords);
     }
@@ -570,6 +607,72 @@ fn fragment(lw: &mut Lowerer, global: Handle<GlobalVariable>, projection: Projec
     let out = b.expr(E::Compose { ty: v4t, components: vec![rgb, alpha] }, sp);
     b.stmt(Statement::Return { value: Some(out) }, sp);
     add_entry_point(lw, projection.entry_point(), ShaderStage::Fragment, b);
+}
+
+/// A float literal in the wrapper's functions (no span: the wrapper's code is not the user's).
+fn lit(b: &mut FnBuilder, v: f64) -> Handle<E> {
+    b.expr(E::Literal(crate::lower::f32_literal(v)), Span::UNDEFINED)
+}
+
+/// A binary operation in the wrapper's functions.
+fn binop(b: &mut FnBuilder, op: Bo, left: Handle<E>, right: Handle<E>) -> Handle<E> {
+    b.expr(E::Binary { op, left, right }, Span::UNDEFINED)
+}
+
+/// A math function of one or two arguments in the wrapper's functions.
+fn mathf(b: &mut FnBuilder, fun: Mf, args: &[Handle<E>]) -> Handle<E> {
+    b.expr(E::Math { fun, arg: args[0], arg1: args.get(1).copied(), arg2: None, arg3: None }, Span::UNDEFINED)
+}
+
+/// Godot 4.6's `acos_approx(x)`: `res = (−0.156583·|x| + π/2)·√(1 − |x|)`, `π − res` for x < 0.
+fn acos_approx(b: &mut FnBuilder, x: Handle<E>) -> Handle<E> {
+    let sp = Span::UNDEFINED;
+    let ax = mathf(b, Mf::Abs, &[x]);
+    let k = lit(b, -0.156583);
+    let half_pi = lit(b, PI / 2.0);
+    let lin = binop(b, Bo::Multiply, k, ax);
+    let res = binop(b, Bo::Add, lin, half_pi);
+    let one = lit(b, 1.0);
+    let rest = binop(b, Bo::Subtract, one, ax);
+    let root = mathf(b, Mf::Sqrt, &[rest]);
+    let res = binop(b, Bo::Multiply, res, root);
+    let zero = lit(b, 0.0);
+    let non_negative = binop(b, Bo::GreaterEqual, x, zero);
+    let pi = lit(b, PI);
+    let mirrored = binop(b, Bo::Subtract, pi, res);
+    b.expr(E::Select { condition: non_negative, accept: res, reject: mirrored }, sp)
+}
+
+/// Godot 4.6's `atan2_approx(y, x)`: `a = min(|x|, |y|) / max(|x|, |y|)`, `s = a²`,
+/// `poly = (1 + (−0.301895 + 0.0872929·s)·s)·a`, then `π/2 − poly` where |y| > |x|, `π − r`
+/// where x < 0, `−r` where y < 0.
+fn atan2_approx(b: &mut FnBuilder, y: Handle<E>, x: Handle<E>) -> Handle<E> {
+    let sp = Span::UNDEFINED;
+    let (ax, ay) = (mathf(b, Mf::Abs, &[x]), mathf(b, Mf::Abs, &[y]));
+    let lo = mathf(b, Mf::Min, &[ax, ay]);
+    let hi = mathf(b, Mf::Max, &[ax, ay]);
+    let a = binop(b, Bo::Divide, lo, hi);
+    let s = binop(b, Bo::Multiply, a, a);
+    let c2 = lit(b, 0.0872929);
+    let c1 = lit(b, -0.301895);
+    let poly = binop(b, Bo::Multiply, c2, s);
+    let poly = binop(b, Bo::Add, c1, poly);
+    let poly = binop(b, Bo::Multiply, poly, s);
+    let one = lit(b, 1.0);
+    let poly = binop(b, Bo::Add, one, poly);
+    let poly = binop(b, Bo::Multiply, poly, a);
+    let half_pi = lit(b, PI / 2.0);
+    let steep = binop(b, Bo::Greater, ay, ax);
+    let folded = binop(b, Bo::Subtract, half_pi, poly);
+    let r = b.expr(E::Select { condition: steep, accept: folded, reject: poly }, sp);
+    let zero = lit(b, 0.0);
+    let x_negative = binop(b, Bo::Less, x, zero);
+    let pi = lit(b, PI);
+    let back = binop(b, Bo::Subtract, pi, r);
+    let r = b.expr(E::Select { condition: x_negative, accept: back, reject: r }, sp);
+    let y_negative = binop(b, Bo::Less, y, zero);
+    let neg = b.expr(E::Unary { op: naga::UnaryOperator::Negate, expr: r }, sp);
+    b.expr(E::Select { condition: y_negative, accept: neg, reject: r }, sp)
 }
 
 /// The basis of the cube face selected by the `cube_face` field, from a constant table.

@@ -149,6 +149,8 @@ pub(crate) struct Lowerer<'a> {
     baked: HashMap<String, ConstValue>,
     /// Whether the wrapper adds Godot's debanding noise (for `use_debanding` shaders).
     pub debanding: crate::Debanding,
+    /// How the wrapper computes SKY_COORDS.
+    pub sky_coords: crate::SkyCoords,
 }
 
 pub(crate) fn span(s: ast::Span) -> Span {
@@ -174,6 +176,7 @@ impl<'a> Lowerer<'a> {
             errors: Vec::new(),
             baked,
             debanding: crate::Debanding::None,
+            sky_coords: crate::SkyCoords::Exact,
         }
     }
 
