@@ -114,27 +114,55 @@ pub struct BenchArgs {
     /// else ~/.cache/gdsky, else the temp dir's gdsky-cache].
     #[arg(long, value_name = "DIR")]
     cache_dir: Option<PathBuf>,
+    #[command(flatten)]
+    truth_args: SamplingTruthArgs,
+    #[command(flatten)]
+    scene: SceneArgs,
+    #[command(flatten)]
+    skipping: super::bench_skip::SkippingArgs,
+}
+
+/// The sampling truth's flags, shared by `bench` and `tune` (shaders that are not
+/// Freeman-compatible).
+#[derive(Args, Clone, Debug)]
+pub struct SamplingTruthArgs {
     /// For a shader that is not Freeman-compatible: the sampling truth raises each quality
     /// knob (doubling) until doubling it changes the f64 image by a mean relative error below
     /// this [default: 1e-3].
     #[arg(long, value_name = "REL", value_parser = parse_tolerance)]
-    converge_tol: Option<f64>,
+    pub converge_tol: Option<f64>,
     /// For a shader that is not Freeman-compatible: samples per pixel side of the sampling
     /// truth (1 to 8). Above 1, every image of the convergence is rendered N× wider and higher
     /// and box-filtered, so the truth is each pixel's area average and the errors include the
     /// shader's aliasing (hashed stars, hard sun edges) [default: 1, the pixel centre].
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=8))]
-    truth_supersample: Option<u32>,
+    pub truth_supersample: Option<u32>,
     /// For a shader that is not Freeman-compatible: also sweep the resolution the sky is shaded
     /// at (`full,half,quarter`, any of them): each configuration is rendered at each, upsampled
     /// bilinearly to the image size (as `render --sky-resolution`), and measured against the
     /// full-resolution truth. The column `sky_resolution` holds the divisor: 1, 2 or 4.
     #[arg(long, value_name = "full,half,quarter")]
-    sky_resolution: Option<String>,
-    #[command(flatten)]
-    scene: SceneArgs,
-    #[command(flatten)]
-    skipping: super::bench_skip::SkippingArgs,
+    pub sky_resolution: Option<String>,
+}
+
+impl SamplingTruthArgs {
+    /// The convergence's stopping rule from the flags.
+    pub fn limits(&self) -> any::Limits {
+        any::Limits {
+            tolerance: self.converge_tol.unwrap_or(CONVERGE_TOL),
+            max_value: MAX_ANY_KNOB,
+            max_doublings: MAX_DOUBLINGS,
+            supersample: self.truth_supersample.unwrap_or(1),
+        }
+    }
+
+    /// The sky-resolution dimension `--sky-resolution` asks for, if any.
+    pub fn sky_resolution_knob(&self) -> Result<Option<Knob>, ExitCode> {
+        self.sky_resolution
+            .as_deref()
+            .map(|text| Knob::sky_resolutions(text).map_err(|e| usage(format!("--sky-resolution: {e}"))))
+            .transpose()
+    }
 }
 
 /// `--converge-tol`: a relative change in (0, 1).
@@ -491,12 +519,12 @@ fn bench(args: &BenchArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
              shader's tables (freeman_lut's transmittance_table) are baked automatically",
         ));
     }
-    if args.converge_tol.is_some() || args.truth_supersample.is_some() {
+    if args.truth_args.converge_tol.is_some() || args.truth_args.truth_supersample.is_some() {
         return Err(usage(
             "--converge-tol and --truth-supersample set the sampling truth of shaders that are not Freeman-compatible",
         ));
     }
-    if args.sky_resolution.is_some() {
+    if args.truth_args.sky_resolution.is_some() {
         return Err(usage(
             "--sky-resolution sweeps shaders that are not Freeman-compatible; for the Freeman sky, --skipping times \
              the half and quarter resolutions",
@@ -853,9 +881,7 @@ fn bench_any(
     let textures = scene_args.textures(scene_file, &loaded)?;
     let sky = any::Sky::new(front, scene_args.overrides().map_err(usage)?).map_err(usage)?.with_textures(textures);
     let mut knobs = any_knobs(&sky, &args.knobs).map_err(usage)?;
-    if let Some(text) = &args.sky_resolution {
-        knobs.push(Knob::sky_resolutions(text).map_err(|e| usage(format!("--sky-resolution: {e}")))?);
-    }
+    knobs.extend(args.truth_args.sky_resolution_knob()?);
     let names: Vec<String> = knobs.iter().map(|k| k.name.clone()).collect();
     // The truth raises the quality knobs only; it is shaded at full resolution.
     let raised: Vec<String> = names.iter().filter(|n| *n != knobs::SKY_RESOLUTION).cloned().collect();
@@ -870,17 +896,12 @@ fn bench_any(
     let gpu = open_gpu()?;
     let adapter = gpu.adapter_info();
     let timer = if gpu.has_timestamps() { "gpu_timestamps" } else { "wall" };
-    let tolerance = args.converge_tol.unwrap_or(CONVERGE_TOL);
+    let limits = args.truth_args.limits();
+    let tolerance = limits.tolerance;
     let bar = sweep::progress_bar(1 + configs.len() as u64 * (1 + u64::from(args.runs)));
     bar.enable_steady_tick(Duration::from_millis(200));
     let started = std::time::Instant::now();
     let setting = |values: &[i32]| -> any::Setting { names.iter().cloned().zip(values.iter().copied()).collect() };
-    let limits = any::Limits {
-        tolerance,
-        max_value: MAX_ANY_KNOB,
-        max_doublings: MAX_DOUBLINGS,
-        supersample: args.truth_supersample.unwrap_or(1),
-    };
     let truth =
         any::converge(&gpu, &sky, &setting(&defaults), &raised, &shots, limits, |m| bar.set_message(m.to_string()))
             .map_err(|e| {

@@ -17,13 +17,13 @@
 //! WGSL/SPIR-V from it with the knobs folded as constants, exactly as `convert --set` bakes),
 //! and it is reviewable as a two-line diff. Its uniforms other than the knobs are unchanged.
 
-use super::bench::{CONVERGE_TOL, MAX_ANY_KNOB, MAX_DOUBLINGS, any_knobs, convergence_table, parse_tolerance};
+use super::bench::{SamplingTruthArgs, any_knobs, convergence_table};
 use super::scene::open_gpu;
 use super::sweep;
 use super::{environment, usage};
 use clap::Args;
 use gdsky::measure::any::{self, Candidate, Shot};
-use gdsky::measure::knobs::{Knob, KnobKind, SKY_RESOLUTION, combinations, specialize_source};
+use gdsky::measure::knobs::{KnobKind, SKY_RESOLUTION, combinations, specialize_source};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -54,21 +54,8 @@ pub struct TuneArgs {
     /// Timed renders per configuration (1 to 1000) after a warm-up; the median counts.
     #[arg(long, value_name = "N", default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1000))]
     runs: u32,
-    /// The sampling truth's tolerance (shaders that are not Freeman-compatible) [default: 1e-3].
-    #[arg(long, value_name = "REL", value_parser = parse_tolerance)]
-    converge_tol: Option<f64>,
-    /// For a shader that is not Freeman-compatible: samples per pixel side of the sampling
-    /// truth (1 to 8). Above 1, every image of the convergence is rendered N× wider and higher
-    /// and box-filtered, so the truth is each pixel's area average and the errors include the
-    /// shader's aliasing (hashed stars, hard sun edges) [default: 1, the pixel centre].
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=8))]
-    truth_supersample: Option<u32>,
-    /// For a shader that is not Freeman-compatible: also sweep the resolution the sky is shaded
-    /// at (`full,half,quarter`, any of them): each configuration is rendered at each, upsampled
-    /// bilinearly to the image size (as `render --sky-resolution`), and measured against the
-    /// full-resolution truth. The column `sky_resolution` holds the divisor: 1, 2 or 4.
-    #[arg(long, value_name = "full,half,quarter")]
-    sky_resolution: Option<String>,
+    #[command(flatten)]
+    truth_args: SamplingTruthArgs,
     /// Folder for the specialized shader and tune.csv (created if missing; checked first).
     #[arg(short = 'o', long = "out-dir", value_name = "DIR", default_value = "out/tune")]
     out_dir: PathBuf,
@@ -136,17 +123,17 @@ fn tune(args: &TuneArgs) -> Result<(), ExitCode> {
     let sky = any::Sky::new(front, Vec::new()).map_err(usage)?;
     let shader = sky.front.shader.as_ref().ok_or(ExitCode::from(1))?;
     let freeman = gdsky::measure::freeman::compatible(shader);
-    if freeman && args.truth_supersample.is_some() {
+    if freeman && args.truth_args.truth_supersample.is_some() {
         return Err(usage(
             "--truth-supersample sets the sampling truth; a Freeman-compatible shader is measured against skyref's integrals",
         ));
     }
     let mut knobs = any_knobs(&sky, &args.knobs).map_err(usage)?;
-    if let Some(text) = &args.sky_resolution {
+    if let Some(knob) = args.truth_args.sky_resolution_knob()? {
         if freeman {
             return Err(usage("--sky-resolution is swept for shaders that are not Freeman-compatible"));
         }
-        knobs.push(Knob::sky_resolutions(text).map_err(|e| usage(format!("--sky-resolution: {e}")))?);
+        knobs.push(knob);
     }
     if knobs.is_empty() {
         return Err(usage(format!(
@@ -170,18 +157,12 @@ fn tune(args: &TuneArgs) -> Result<(), ExitCode> {
     let adapter = gpu.adapter_info();
     let bar = sweep::progress_bar(1 + configs.len() as u64 * (1 + u64::from(args.runs)));
     bar.enable_steady_tick(Duration::from_millis(200));
-    let tolerance = args.converge_tol.unwrap_or(CONVERGE_TOL);
     let (truth, truth_text, converged) = if freeman {
         bar.set_message("truth: skyref's integral per scene");
         let images = freeman_truth(shader, &shots).map_err(usage)?;
         (images, "skyref::truth, the Freeman model's integrals (~1e-7)".to_string(), None)
     } else {
-        let limits = any::Limits {
-            tolerance,
-            max_value: MAX_ANY_KNOB,
-            max_doublings: MAX_DOUBLINGS,
-            supersample: args.truth_supersample.unwrap_or(1),
-        };
+        let limits = args.truth_args.limits();
         let c =
             any::converge(&gpu, &sky, &setting(&defaults), &raised, &shots, limits, |m| bar.set_message(m.to_string()))
                 .map_err(usage)?;
