@@ -188,7 +188,7 @@ pub fn write_lowered_with(
     ] {
         // The one safe writer: atomic (cargo never sees a half-written file), through a symbolic
         // link to its target, never over a directory or special file.
-        skyrun::safe_io::write_atomically(path, bytes).map_err(|e| BuildError::Io(path.clone(), e))?;
+        skycore::io::write_atomically(path, bytes).map_err(|e| BuildError::Io(path.clone(), e))?;
     }
     Ok(compiled)
 }

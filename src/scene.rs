@@ -45,6 +45,7 @@
 
 use gdshader::diag::{Diagnostic, FileId, SourceDb, render_human};
 use serde::Deserialize;
+use skycore::{Projection, SkyResolution};
 use std::collections::BTreeMap;
 use std::ops::Range as Span;
 use std::path::{Path, PathBuf};
@@ -156,30 +157,6 @@ pub fn check_size(w: u64, h: u64) -> Result<(u32, u32), String> {
     let (w, h) = (side(w)?, side(h)?);
     skyrun::check_render_size(w, h)?;
     Ok((w, h))
-}
-
-/// How pixels map to view directions.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum ProjectionKind {
-    /// Equirectangular.
-    Panorama,
-    /// Godot's perspective camera.
-    Camera,
-    /// The radiance cubemap: six square faces.
-    Cubemap,
-}
-
-/// The resolution the sky is drawn at (Godot's half/quarter-resolution passes).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum SkyResolution {
-    /// Full resolution.
-    Full,
-    /// Half resolution.
-    Half,
-    /// Quarter resolution.
-    Quarter,
 }
 
 /// Godot's radiance process modes for the cubemap projection of `animate`.
@@ -331,7 +308,7 @@ pub struct SceneFile {
     /// The shader, resolved against the scene file's folder; `None`: the bundled Freeman sky.
     pub shader: Option<PathBuf>,
     /// The projection.
-    pub projection: Option<ProjectionKind>,
+    pub projection: Option<Projection>,
     /// Image size (a cubemap: one face).
     pub size: Option<(u32, u32)>,
     /// TIME in seconds.
@@ -409,7 +386,7 @@ impl std::fmt::Display for SceneError {
 #[serde(deny_unknown_fields)]
 struct RawScene {
     shader: Option<Spanned<String>>,
-    projection: Option<ProjectionKind>,
+    projection: Option<Projection>,
     size: Option<Spanned<[u64; 2]>>,
     time: Option<Spanned<f64>>,
     sun: Option<RawSun>,
@@ -612,7 +589,7 @@ fn unknown_field_note(message: &str) -> Option<String> {
 impl SceneFile {
     /// Reads, parses and validates the scene file at `path`.
     pub fn load(path: &Path) -> Result<SceneFile, SceneError> {
-        let bytes = gdshader::preprocess::read_limited(path, MAX_SCENE_BYTES)
+        let bytes = skycore::io::read_limited(path, MAX_SCENE_BYTES)
             .map_err(|e| SceneError::Read(format!("cannot read {}: {e}", path.display())))?;
         let text =
             String::from_utf8(bytes).map_err(|_| SceneError::Invalid(format!("{}: not UTF-8 text", path.display())))?;
@@ -648,7 +625,7 @@ impl SceneFile {
                 }
             }
         });
-        if let (Some(ProjectionKind::Cubemap), Some((w, h)), Some(s)) = (raw.projection, size, &raw.size)
+        if let (Some(Projection::CubeFace(_)), Some((w, h)), Some(s)) = (raw.projection, size, &raw.size)
             && w != h
         {
             c.error(s.span(), format!("`size`: a cubemap face must be square, not {w}x{h}"));

@@ -60,7 +60,7 @@ impl Sky {
     /// Binds `table` as the shader's `transmittance_table`, bit for bit (Rgba32Float).
     fn bind_table(&mut self, gpu: &Gpu, table: &TransmittanceTable) {
         let image = skyrun::Image { width: table.width, height: table.height, pixels: table.texels.clone() };
-        let data = skyrun::TextureData::from_image(&image).expect("a 256x64 table is a valid texture");
+        let data = skyrun::texture_from_image(&image).expect("a 256x64 table is a valid texture");
         self.shader.set_texture(gpu, "transmittance_table", &data).expect("freeman_lut declares transmittance_table");
     }
 
@@ -85,12 +85,7 @@ impl Sky {
 }
 
 fn scene(altitude_m: f64, sun_elevation_deg: f64) -> Scene {
-    Scene {
-        sun_elevation_deg,
-        sun_azimuth_deg: 30.0,
-        position: glam::DVec3::new(0.0, altitude_m, 0.0),
-        ..Scene::default()
-    }
+    Scene::default().with_sun(sun_elevation_deg, 30.0).with_position(glam::DVec3::new(0.0, altitude_m, 0.0))
 }
 
 fn narrow(image: &[[f64; 4]]) -> Vec<[f32; 4]> {
@@ -222,7 +217,7 @@ fn fast_freeman_sky_matches_its_reference_and_the_truth() {
         for (scene, projection, size) in [
             (scene(0.5, 10.0), Projection::Panorama, (32, 16)),
             (scene(150_000.0, 0.0), Projection::Panorama, (32, 16)),
-            (Scene { sun_azimuth_deg: 0.0, ..scene(1_000.0, 0.0) }, Projection::Camera, (63, 31)),
+            (scene(1_000.0, 0.0).with_sun(0.0, 0.0), Projection::Camera, (63, 31)),
         ] {
             for (name, sky) in [("fast", &fast), ("lut", &lut)] {
                 let bad = non_finite(&sky.render(&gpu, &scene, projection, size, overrides));

@@ -92,7 +92,7 @@ impl Sky {
 }
 
 fn scene(altitude_m: f64, sun_elevation_deg: f64, sun_azimuth_deg: f64) -> Scene {
-    Scene { sun_elevation_deg, sun_azimuth_deg, position: glam::DVec3::new(0.0, altitude_m, 0.0), ..Scene::default() }
+    Scene::default().with_sun(sun_elevation_deg, sun_azimuth_deg).with_position(glam::DVec3::new(0.0, altitude_m, 0.0))
 }
 
 /// skyref's f64 rendering of the original, rounded to f32 for [`compare`].

@@ -232,15 +232,11 @@ const SET_UPS: [SetUp; 2] = [
 
 impl SetUp {
     fn scene(&self) -> Scene {
-        Scene {
-            sun_elevation_deg: self.sun.0,
-            sun_azimuth_deg: self.sun.1,
-            position: glam::DVec3::new(0.0, self.altitude_m, 0.0),
-            fov_deg: self.fov_deg,
-            yaw_deg: self.yaw_deg,
-            pitch_deg: self.pitch_deg,
-            ..Scene::default()
-        }
+        Scene::default()
+            .with_sun(self.sun.0, self.sun.1)
+            .with_position(glam::DVec3::new(0.0, self.altitude_m, 0.0))
+            .with_fov(self.fov_deg)
+            .with_view(self.yaw_deg, self.pitch_deg)
     }
 
     fn job(&self, code: &str) -> Job {

@@ -116,7 +116,7 @@ impl Sky {
 }
 
 fn sun(elevation: f64, azimuth: f64) -> Scene {
-    Scene { sun_elevation_deg: elevation, sun_azimuth_deg: azimuth, ..Scene::default() }
+    Scene::default().with_sun(elevation, azimuth)
 }
 
 fn non_finite(image: &[[f32; 4]]) -> usize {
@@ -257,15 +257,11 @@ fn sunfall_matches_godot_with_its_noise_texture() {
     let set_ups = [(90.0, 0.0, 0.0, 1.0, 10.0, 0.0), (60.0, 120.0, 35.0, 500.0, 35.0, 150.0)];
     let mut renders = Vec::new();
     for &(fov, yaw, pitch, altitude, elevation, azimuth) in &set_ups {
-        let scene = Scene {
-            sun_elevation_deg: elevation,
-            sun_azimuth_deg: azimuth,
-            position: glam::DVec3::new(0.0, altitude, 0.0),
-            fov_deg: fov,
-            yaw_deg: yaw,
-            pitch_deg: pitch,
-            ..Scene::default()
-        };
+        let scene = Scene::default()
+            .with_sun(elevation, azimuth)
+            .with_position(glam::DVec3::new(0.0, altitude, 0.0))
+            .with_fov(fov)
+            .with_view(yaw, pitch);
         let ours = sky.render(&gpu, &scene, Projection::Camera, 0.0, &[]);
         let mut job = Job::new(&code, SIZE.0, SIZE.1);
         job.camera = Camera { fov_deg: fov, yaw_deg: yaw, pitch_deg: pitch, position: [0.0, altitude, 0.0] };

@@ -92,7 +92,7 @@ fn tuned_freeman_sky_passes_the_pixel_test_against_skyref_at_its_knobs() {
     let params = FreemanParams::default().with_samples(view, sun);
     let size = (64, 32);
     for sun_deg in [10.0, 60.0] {
-        let scene = Scene { sun_elevation_deg: sun_deg, ..Scene::default() };
+        let scene = Scene::default().with_sun(sun_deg, 0.0);
         let image = render_file(&gpu, &path, &scene, size);
         let reference = skyref::f32::render(&params, &scene, Projection::Panorama, size.0, size.1);
         let m = skyrun::compare(&image, &reference, 1e-4);
@@ -173,7 +173,7 @@ fn the_documented_tuned_freeman_shaders_pass_the_pixel_test() {
         let params = FreemanParams::default().with_samples(baked("view_samples"), baked("sun_samples"));
         let size = (48, 24);
         for sun_deg in [10.0, 60.0] {
-            let scene = Scene { sun_elevation_deg: sun_deg, ..Scene::default() };
+            let scene = Scene::default().with_sun(sun_deg, 0.0);
             let image = render_file(&gpu, &path, &scene, size);
             let reference = skyref::f32::render(&params, &scene, Projection::Panorama, size.0, size.1);
             let m = skyrun::compare(&image, &reference, 1e-4);

@@ -401,21 +401,6 @@ impl Compiled {
     }
 }
 
-/// A uniform value in `--set` syntax.
-fn uniform_text(value: skyrun::UniformValue) -> String {
-    use skyrun::UniformValue as U;
-    let join = |v: &[f32]| v.iter().map(|c| format!("{c:?}")).collect::<Vec<_>>().join(",");
-    match value {
-        U::Float(v) => format!("{v:?}"),
-        U::Int(v) => v.to_string(),
-        U::UInt(v) => v.to_string(),
-        U::Bool(v) => v.to_string(),
-        U::Vec2(v) => join(&v),
-        U::Vec3(v) => join(&v),
-        U::Vec4(v) => join(&v),
-    }
-}
-
 /// One configuration of one shader, as the timing loop sees it.
 struct Entry {
     subject: usize,
@@ -458,7 +443,7 @@ fn specialize(
                     && !all_knobs.iter().any(|k| k.name == *name)
                     && !override_names.iter().any(|o| o == name)
             })
-            .map(|(name, value)| (name.to_string(), uniform_text(value)))
+            .map(|(name, value)| (name.to_string(), value.to_string()))
             .collect();
         let mut names: Vec<&String> = baked.keys().collect();
         names.sort();
@@ -563,7 +548,7 @@ fn bench(args: &BenchArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
         specialize(&mut loaded, args.bake_scene, &cli_sets, input.scene.as_ref(), &base, &all_knobs, &override_names)?;
         // freeman_lut's table from the bench's base values (no knob shapes it).
         let base_values: Vec<(String, String)> =
-            skyrun::freeman_values(&base).into_iter().map(|(n, v)| (n.to_string(), uniform_text(v))).collect();
+            skyrun::freeman_values(&base).into_iter().map(|(n, v)| (n.to_string(), v.to_string())).collect();
         if let Some(note) = loaded.bake_tables(&base_values).map_err(usage)? {
             eprintln!("{name}: {note}");
         }
@@ -757,7 +742,7 @@ fn bench(args: &BenchArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
                     let values = skyrun::freeman_values(&base)
                         .into_iter()
                         .filter(|(n, _)| varied.iter().any(|v| v == n))
-                        .map(|(n, v)| (n.to_string(), uniform_text(v)))
+                        .map(|(n, v)| (n.to_string(), v.to_string()))
                         .collect();
                     m.respecialize(values, &[])?;
                 }
@@ -891,8 +876,10 @@ fn bench_any(
         configs.push(defaults.clone());
     }
     let scene = scene_args.scene();
-    let shots: Vec<any::Shot> =
-        views.iter().map(|&projection| any::Shot { scene, projection, width, height, time: scene_args.time }).collect();
+    let shots: Vec<any::Shot> = views
+        .iter()
+        .map(|&projection| any::Shot { scene: scene.with_time(f64::from(scene_args.time)), projection, width, height })
+        .collect();
     let gpu = open_gpu()?;
     let adapter = gpu.adapter_info();
     let timer = if gpu.has_timestamps() { "gpu_timestamps" } else { "wall" };

@@ -42,12 +42,7 @@ pub fn run(args: &DemoArgs) -> ExitCode {
 }
 
 fn demo(out: &Path) -> Result<(), ExitCode> {
-    let sun = Scene {
-        sun_elevation_deg: 10.0,
-        sun_azimuth_deg: 30.0,
-        position: glam::DVec3::new(0.0, 1.0, 0.0),
-        ..Scene::default()
-    };
+    let sun = Scene::default().with_sun(10.0, 30.0).with_position(glam::DVec3::new(0.0, 1.0, 0.0));
     let views = [
         View { name: "panorama", projection: Projection::Panorama, width: 512, height: 256, scene: sun },
         View {
@@ -55,7 +50,7 @@ fn demo(out: &Path) -> Result<(), ExitCode> {
             projection: Projection::Camera,
             width: 384,
             height: 256,
-            scene: Scene { fov_deg: 60.0, yaw_deg: -30.0, pitch_deg: 8.0, ..sun },
+            scene: sun.with_fov(60.0).with_view(-30.0, 8.0),
         },
     ];
     // Every output is checked before any work: the folder exists or can be created, and no file

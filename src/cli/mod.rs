@@ -19,11 +19,11 @@ pub mod tune;
 use std::path::Path;
 use std::process::ExitCode;
 
-/// Checks, before any work, that `path` can be written (see [`skyrun::safe_io`]: a regular file,
+/// Checks, before any work, that `path` can be written (see [`skycore::io`]: a regular file,
 /// absent in an existing directory, or a symbolic link to one; never a directory, device, FIFO or
 /// socket; the directory writable). Exit 2 with the reason: the environment is wrong.
 pub fn check_output(path: &Path) -> Result<(), ExitCode> {
-    skyrun::safe_io::check_output(path)
+    skycore::io::check_output(path)
         .map(drop)
         .map_err(|err| environment(format!("cannot write {}: {err}", path.display())))
 }
@@ -32,7 +32,7 @@ pub fn check_output(path: &Path) -> Result<(), ExitCode> {
 /// the folder exists or, with `create`, can be created; each file that exists there can be
 /// replaced. Exit 2 with the reason.
 pub fn check_output_dir(dir: &Path, create: bool, files: &[&str]) -> Result<(), ExitCode> {
-    skyrun::safe_io::check_output_dir(dir, create)
+    skycore::io::check_output_dir(dir, create)
         .map_err(|err| environment(format!("cannot write into {}: {err}", dir.display())))?;
     if dir.is_dir() {
         for file in files {
@@ -44,14 +44,13 @@ pub fn check_output_dir(dir: &Path, create: bool, files: &[&str]) -> Result<(), 
 
 /// Creates an output folder (when the outputs are ready, after [`check_output_dir`]). Exit 2.
 pub fn create_output_dir(dir: &Path) -> Result<(), ExitCode> {
-    skyrun::safe_io::create_output_dir(dir)
-        .map_err(|err| environment(format!("cannot create {}: {err}", dir.display())))
+    skycore::io::create_output_dir(dir).map_err(|err| environment(format!("cannot create {}: {err}", dir.display())))
 }
 
-/// Writes `bytes` to `path` with the one safe, atomic writer ([`skyrun::safe_io::write_atomically`]);
+/// Writes `bytes` to `path` with the one safe, atomic writer ([`skycore::io::write_atomically`]);
 /// the error names the file.
 pub fn write_file(path: &Path, bytes: &[u8]) -> Result<(), String> {
-    skyrun::safe_io::write_atomically(path, bytes).map_err(|err| format!("cannot write {}: {err}", path.display()))
+    skycore::io::write_atomically(path, bytes).map_err(|err| format!("cannot write {}: {err}", path.display()))
 }
 
 /// Prints `message` as an error and gives exit code 1: the input is wrong (CLI contract).

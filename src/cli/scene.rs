@@ -86,15 +86,13 @@ pub struct SceneArgs {
 impl SceneArgs {
     /// The scene in skyref's terms.
     pub fn scene(&self) -> Scene {
-        Scene {
-            sun_elevation_deg: self.sun.0,
-            sun_azimuth_deg: self.sun.1,
-            light_enabled: !self.no_light,
-            position: glam::DVec3::new(self.position.0, self.position.1, self.position.2),
-            fov_deg: self.fov,
-            yaw_deg: self.yaw,
-            pitch_deg: self.pitch,
-        }
+        Scene::default()
+            .with_sun(self.sun.0, self.sun.1)
+            .with_sun_enabled(!self.no_light)
+            .with_position(glam::DVec3::new(self.position.0, self.position.1, self.position.2))
+            .with_fov(self.fov)
+            .with_view(self.yaw, self.pitch)
+            .with_time(f64::from(self.time))
     }
 
     /// The `--set` pairs, or a message naming the malformed one.
@@ -169,24 +167,22 @@ impl SceneArgs {
     /// The built-ins of this scene for a `width`×`height` view: [`SkyBuiltins::from_scene`],
     /// TIME, and from a scene file the sun's energy and colour and LIGHT1 … LIGHT3.
     pub fn builtins(&self, file: Option<&SceneFile>, width: u32, height: u32) -> skyrun::SkyBuiltins {
-        let mut b = skyrun::SkyBuiltins::from_scene(&self.scene(), width, height);
-        b.time = self.time;
+        let mut scene = self.scene();
         if let Some(file) = file {
-            b.lights[0].energy = file.sun_energy.unwrap_or(1.0);
-            b.lights[0].color = file.sun_color.unwrap_or([1.0; 3]);
-            for (slot, light) in b.lights[1..].iter_mut().zip(&file.lights) {
-                let dir = Scene { sun_elevation_deg: light.elevation, sun_azimuth_deg: light.azimuth, ..self.scene() }
-                    .light0_direction();
-                *slot = skyrun::SkyLight {
-                    direction: [dir.x as f32, dir.y as f32, dir.z as f32],
+            scene.sun_mut().energy = file.sun_energy.unwrap_or(1.0);
+            scene.sun_mut().color = file.sun_color.unwrap_or([1.0; 3]);
+            for (slot, light) in scene.lights[1..].iter_mut().zip(&file.lights) {
+                *slot = skycore::Light {
+                    enabled: light.enabled,
+                    elevation_deg: light.elevation,
+                    azimuth_deg: light.azimuth,
                     energy: light.energy,
                     color: light.color,
-                    size: 0.0,
-                    enabled: light.enabled,
+                    angular_diameter_deg: 0.0,
                 };
             }
         }
-        b
+        skyrun::SkyBuiltins::from_scene(&scene, width, height)
     }
 
     /// The views to render: one projection, or the six cube faces; and the size of each.
@@ -471,7 +467,7 @@ impl LoadedShader {
         let started = std::time::Instant::now();
         let table = skyref::lut::bake(&params, width, height);
         let image = skyrun::Image { width: table.width, height: table.height, pixels: table.texels };
-        let data = skyrun::TextureData::from_image(&image).map_err(|e| e.to_string())?;
+        let data = skyrun::texture_from_image(&image).map_err(|e| e.to_string())?;
         self.textures.push((TRANSMITTANCE_TABLE.to_string(), data));
         Ok(Some(format!(
             "{TRANSMITTANCE_TABLE}: baked {width}x{height} from the material in {:.2?} (give --texture {TRANSMITTANCE_TABLE}=TABLE.exr to use another)",
@@ -588,7 +584,7 @@ fn split_grid(path: &mut PathBuf) -> Result<Option<(u32, u32)>, String> {
 fn import_grid(image: &Path) -> Option<(u32, u32)> {
     let mut name = image.as_os_str().to_owned();
     name.push(".import");
-    let bytes = skyrun::safe_io::read_limited(Path::new(&name), 1 << 20).ok()?;
+    let bytes = skycore::io::read_limited(Path::new(&name), 1 << 20).ok()?;
     let text = String::from_utf8_lossy(&bytes);
     let value = |key: &str| {
         text.lines()

@@ -252,7 +252,7 @@ fn stress(args: &StressArgs) -> Result<ExitCode, ExitCode> {
             // it, and a stale table would be counted as the shader's error.
             let table = table_for(&params);
             let image = skyrun::Image { width: table.width, height: table.height, pixels: table.texels };
-            let data = skyrun::TextureData::from_image(&image).map_err(usage)?;
+            let data = skyrun::texture_from_image(&image).map_err(usage)?;
             shader.set_texture(&gpu, super::scene::TRANSMITTANCE_TABLE, &data).map_err(usage)?;
         }
         let (w, h) = size(case.view);

@@ -151,7 +151,14 @@ fn tune(args: &TuneArgs) -> Result<(), ExitCode> {
     }
     let setting = |values: &[i32]| -> any::Setting { names.iter().cloned().zip(values.iter().copied()).collect() };
     let (w, h) = args.size;
-    let shots: Vec<Shot> = args.suns.iter().map(|&sun| Shot { time: args.time, ..Shot::panorama(sun, w, h) }).collect();
+    let shots: Vec<Shot> = args
+        .suns
+        .iter()
+        .map(|&sun| {
+            let shot = Shot::panorama(sun, w, h);
+            Shot { scene: shot.scene.with_time(f64::from(args.time)), ..shot }
+        })
+        .collect();
 
     let gpu = open_gpu()?;
     let adapter = gpu.adapter_info();

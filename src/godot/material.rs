@@ -253,7 +253,7 @@ impl Loader {
                 format!("more than {} resource files referenced: a cycle, or too deep", super::MAX_FILES),
             )));
         }
-        let bytes = match gdshader::preprocess::read_limited(path, super::MAX_RESOURCE_BYTES) {
+        let bytes = match skycore::io::read_limited(path, super::MAX_RESOURCE_BYTES) {
             Ok(b) => b,
             Err(e) => {
                 let message = format!("cannot read {}: {e}", path.display());

@@ -14,10 +14,10 @@ use skyrun::{F64Sky, Gpu, RenderOptions, SkyBuiltins, SkyResolution, SkyShader};
 use std::collections::HashMap;
 use std::time::Duration;
 
-/// One image to render: the scene (sun, camera), the projection, the size and TIME.
+/// One image to render: the scene (sun, camera, TIME), the projection and the size.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Shot {
-    /// Sun and camera.
+    /// Sun, camera and TIME.
     pub scene: Scene,
     /// Panorama or camera.
     pub projection: Projection,
@@ -25,35 +25,23 @@ pub struct Shot {
     pub width: u32,
     /// Height in pixels.
     pub height: u32,
-    /// The shader's TIME, seconds.
-    pub time: f32,
 }
 
 impl Shot {
     /// A panorama from 1 m above the ground with the sun at `sun` degrees (azimuth 0).
     pub fn panorama(sun: f64, width: u32, height: u32) -> Shot {
-        Shot { scene: day_scene(sun), projection: Projection::Panorama, width, height, time: 0.0 }
+        Shot { scene: day_scene(sun), projection: Projection::Panorama, width, height }
     }
 
     /// The built-ins of the shot.
     pub fn builtins(&self) -> SkyBuiltins {
-        let mut b = SkyBuiltins::from_scene(&self.scene, self.width, self.height);
-        b.time = self.time;
-        b
+        SkyBuiltins::from_scene(&self.scene, self.width, self.height)
     }
 }
 
 /// The scene the generic sweeps start from: camera 1 m up looking north, light on.
 pub fn day_scene(sun: f64) -> Scene {
-    Scene {
-        sun_elevation_deg: sun,
-        sun_azimuth_deg: 0.0,
-        light_enabled: true,
-        position: glam::DVec3::new(0.0, 1.0, 0.0),
-        fov_deg: 75.0,
-        yaw_deg: 0.0,
-        pitch_deg: 0.0,
-    }
+    Scene::default().with_sun(sun, 0.0).with_position(glam::DVec3::new(0.0, 1.0, 0.0)).with_fov(75.0)
 }
 
 /// One f64 image per shot.
@@ -637,8 +625,12 @@ pub struct Case {
 /// horizon) and each uniform with a hint_range at both ends. `quick` keeps a few of each.
 pub fn stress_cases(shader: &gdshader::CheckedShader, quick: bool, pano: (u32, u32), cam: (u32, u32)) -> Vec<Case> {
     let mut cases = Vec::new();
-    let pano_shot =
-        |scene: Scene, time: f32| Shot { scene, projection: Projection::Panorama, width: pano.0, height: pano.1, time };
+    let pano_shot = |scene: Scene, time: f32| Shot {
+        scene: scene.with_time(f64::from(time)),
+        projection: Projection::Panorama,
+        width: pano.0,
+        height: pano.1,
+    };
     let suns: &[f64] =
         if quick { &[-10.0, 0.0, 30.0] } else { &[-90.0, -30.0, -5.0, -1.0, 0.0, 1.0, 5.0, 15.0, 30.0, 60.0, 90.0] };
     for &sun in suns {
@@ -654,7 +646,7 @@ pub fn stress_cases(shader: &gdshader::CheckedShader, quick: bool, pano: (u32, u
     let heights: &[f64] = if quick { &[-100.0, 1e5] } else { &[-1e3, -1.0, 0.0, 100.0, 1e4, 1e5, 1e6] };
     for &y in heights {
         let mut scene = day_scene(30.0);
-        scene.position.y = y;
+        scene.camera.position.y = y;
         cases.push(Case {
             label: format!("camera at y = {y} m"),
             slug: format!("y{y}"),
@@ -682,12 +674,12 @@ pub fn stress_cases(shader: &gdshader::CheckedShader, quick: bool, pano: (u32, u
         let mut scene = day_scene(30.0);
         // Exactly ±90° makes the camera basis degenerate in some engines; Godot's own camera
         // limits itself just short of it too.
-        scene.pitch_deg = pitch.clamp(-89.99, 89.99);
+        scene.camera.pitch_deg = pitch.clamp(-89.99, 89.99);
         cases.push(Case {
             label: format!("camera {name}"),
             slug: format!("view-{}", name.replace(' ', "-")),
             group: "view",
-            shot: Shot { scene, projection: Projection::Camera, width: cam.0, height: cam.1, time: 0.0 },
+            shot: Shot { scene, projection: Projection::Camera, width: cam.0, height: cam.1 },
             uniform: None,
         });
     }

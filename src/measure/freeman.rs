@@ -168,7 +168,7 @@ pub fn cached_truth(
         if !key_path.exists() {
             return Err("not cached yet".into());
         }
-        let stored = skyrun::safe_io::read_limited(&key_path, MAX_KEY_BYTES).map_err(|e| e.to_string())?;
+        let stored = skycore::io::read_limited(&key_path, MAX_KEY_BYTES).map_err(|e| e.to_string())?;
         let stored = String::from_utf8(stored).map_err(|_| "the key is not UTF-8")?;
         let (stored_key, sum) = stored.rsplit_once("checksum=").ok_or("no checksum")?;
         if stored_key != key {
@@ -205,12 +205,12 @@ pub fn cached_truth(
                 pixels: vec![[0.0; 4]; (strip_w * height) as usize],
             });
             let elapsed = started.elapsed();
-            let stored = skyrun::safe_io::create_output_dir(dir)
+            let stored = skycore::io::create_output_dir(dir)
                 .map_err(|e| format!("{}: {e}", dir.display()))
                 .and_then(|()| skyrun::write_exr(&exr, &image).map_err(|e| e.to_string()))
                 .and_then(|()| {
                     let text = format!("{key}checksum={:016x}\n", checksum(&image.pixels));
-                    skyrun::safe_io::write_atomically(&key_path, text.as_bytes())
+                    skycore::io::write_atomically(&key_path, text.as_bytes())
                         .map_err(|e| format!("cannot write {}: {e}", key_path.display()))
                 });
             let note = match stored {

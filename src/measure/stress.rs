@@ -59,15 +59,10 @@ pub struct Case {
 
 impl Case {
     pub fn scene(&self) -> Scene {
-        Scene {
-            sun_elevation_deg: self.sun,
-            sun_azimuth_deg: 0.0,
-            light_enabled: true,
-            position: glam::DVec3::new(0.0, self.altitude, 0.0),
-            fov_deg: if self.view == View::Horizon { HORIZON_FOV } else { 90.0 },
-            yaw_deg: 0.0,
-            pitch_deg: 0.0,
-        }
+        Scene::default()
+            .with_sun(self.sun, 0.0)
+            .with_position(glam::DVec3::new(0.0, self.altitude, 0.0))
+            .with_fov(if self.view == View::Horizon { HORIZON_FOV } else { 90.0 })
     }
 
     pub fn projection(&self) -> Projection {

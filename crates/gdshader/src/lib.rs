@@ -92,12 +92,12 @@ impl FrontendOutput {
 
 /// Reads and checks the shader at `path`, reading includes from disk.
 ///
-/// The file is read with [`preprocess::read_limited`]: it must be a regular file (a FIFO, a
+/// The file is read with [`skycore::io::read_limited`]: it must be a regular file (a FIFO, a
 /// device, a socket or a directory is refused before it is opened) of at most
 /// [`preprocess::MAX_SOURCE_BYTES`] (4 MiB, the most a shader and its includes may come to);
 /// anything else is an error, as is a file that cannot be read.
 pub fn check_file(path: &Path) -> std::io::Result<FrontendOutput> {
-    let bytes = preprocess::read_limited(path, preprocess::MAX_SOURCE_BYTES)?;
+    let bytes = skycore::io::read_limited(path, preprocess::MAX_SOURCE_BYTES)?;
     Ok(check_source(&path.display().to_string(), bytes, Some(path.to_path_buf()), &mut FsLoader))
 }
 

@@ -31,7 +31,7 @@ pub mod wrapper;
 pub use emit::{EmitError, exact_arithmetic, reread_wgsl, to_spirv, to_wgsl};
 pub use lower::{GLOBAL_UNIFORM_GROUP, MATERIAL_GROUP, TextureSlot, UniformSlot};
 pub use widen::{F64_MATH_WGSL, F64Output};
-pub use wrapper::{Debanding, Projection, SkyCoords};
+pub use wrapper::{Debanding, SkyCoords};
 
 use gdshader::parse::ast;
 use gdshader::{Diagnostic, FrontendOutput};

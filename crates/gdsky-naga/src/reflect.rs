@@ -5,13 +5,14 @@
 //! uniforms' defaults, hints, group paths and docs, the built-ins the shader uses, its render
 //! modes, the passes it needs, and when Godot would re-render it.
 
-use crate::wrapper::{BUILTIN_FIELDS, LIGHT_FIELDS, Projection};
+use crate::wrapper::{BUILTIN_FIELDS, LIGHT_FIELDS};
 use crate::{Lowered, MATERIAL_GROUP};
 use gdshader::CheckedShader;
 use gdshader::check::consteval::ConstValue;
 use gdshader::check::types::{Scalar, Type};
 use naga::Handle;
 use serde_json::{Value, json};
+use skycore::Projection;
 use std::collections::{BTreeSet, HashMap, HashSet};
 
 /// A value in `--set` syntax, as [`parse_value`] reads it back (`1.5`, `24`, `true`,
@@ -143,6 +144,16 @@ pub struct TextureBinding {
     pub repeat: bool,
 }
 
+impl TextureBinding {
+    /// Whether the uniform's hints ask for mipmaps: a `filter_*_mipmap*` hint given in the shader.
+    /// Godot's default filter for a sampler without a filter hint is `linear_mipmap` too, but the
+    /// texture then only has the levels its import made (a 2D image imports without mipmaps by
+    /// default), so a texture gets a chain only when the shader's author asked for one.
+    pub fn wants_mipmaps(&self) -> bool {
+        self.hints.iter().any(|h| h.starts_with("filter_") && h.contains("mipmap"))
+    }
+}
+
 /// The material textures of a lowered shader, by binding: one per sampler uniform, one per
 /// element of a sampler array.
 pub fn texture_bindings(shader: &CheckedShader, lowered: &Lowered) -> Vec<TextureBinding> {
@@ -250,7 +261,7 @@ pub fn reflection(name: &str, shader: &CheckedShader, lowered: &Lowered, baked: 
         "shader": name,
         "entry_points": {
             "vertex": "vs_main",
-            "fragment": Projection::ALL.iter().map(|p| (format!("{p:?}").to_lowercase(), json!(p.entry_point()))).collect::<serde_json::Map<_, _>>(),
+            "fragment": Projection::ENTRIES.iter().map(|p| (p.name().to_string(), json!(p.entry_point()))).collect::<serde_json::Map<_, _>>(),
         },
         "bindings": {
             "builtins": {

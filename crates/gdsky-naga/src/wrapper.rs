@@ -21,6 +21,7 @@ use naga::{
     FunctionResult, GlobalVariable, Handle, Literal, MathFunction as Mf, MemoryDecorations, ResourceBinding,
     ShaderStage, Span, Statement, Type, TypeInner, VectorSize,
 };
+use skycore::Projection;
 use std::collections::HashMap;
 use std::f64::consts::PI;
 
@@ -254,57 +255,13 @@ pub(crate) fn read_builtin(
     Some(Val::Value(value))
 }
 
-/// How a fragment entry point turns a pixel into EYEDIR.
-#[derive(Clone, Copy, PartialEq, Eq, Debug)]
-pub enum Projection {
-    /// Equirectangular: the inverse of SKY_COORDS.
-    Panorama,
-    /// Godot's camera: vertical FOV, rotated by the camera basis.
-    Camera,
-    /// One face of a cubemap, as Godot's radiance pass renders it.
-    Cubemap,
-}
-
-impl Projection {
-    /// Every projection, in entry-point order.
-    pub const ALL: [Projection; 3] = [Projection::Panorama, Projection::Camera, Projection::Cubemap];
-
-    /// The fragment entry point's name.
-    pub fn entry_point(self) -> &'static str {
-        match self {
-            Projection::Panorama => "fs_panorama",
-            Projection::Camera => "fs_camera",
-            Projection::Cubemap => "fs_cubemap",
-        }
-    }
-}
-
-/// Godot's cubemap face orientations (4.3–4.5): `Basis::looking_at(normal, up)` for the normals
-/// +X, −X, +Y, −Y, +Z, −Z with ups −Y, −Y, +Z, −Z, −Y, −Y. Columns are the basis x, y, z axes.
-pub fn cube_face_basis(face: usize) -> [[f32; 3]; 3] {
-    let (target, up): ([f32; 3], [f32; 3]) = match face {
-        0 => ([1.0, 0.0, 0.0], [0.0, -1.0, 0.0]),
-        1 => ([-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]),
-        2 => ([0.0, 1.0, 0.0], [0.0, 0.0, 1.0]),
-        3 => ([0.0, -1.0, 0.0], [0.0, 0.0, -1.0]),
-        4 => ([0.0, 0.0, 1.0], [0.0, -1.0, 0.0]),
-        _ => ([0.0, 0.0, -1.0], [0.0, -1.0, 0.0]),
-    };
-    let z = [-target[0], -target[1], -target[2]];
-    let cross =
-        |a: [f32; 3], b: [f32; 3]| [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
-    let x = cross(up, z);
-    let y = cross(z, x);
-    [x, y, z]
-}
-
 /// Adds the vertex entry point and one fragment entry point per projection.
 pub(crate) fn entry_points(lw: &mut Lowerer) {
     let Some(global) = lw.builtins.global else {
         return;
     };
     vertex(lw);
-    for p in Projection::ALL {
+    for p in Projection::ENTRIES {
         fragment(lw, global, p);
     }
 }
@@ -448,7 +405,7 @@ fn fragment(lw: &mut Lowerer, global: Handle<GlobalVariable>, projection: Projec
             let z = b.expr(E::Unary { op: naga::UnaryOperator::Negate, expr: zc }, sp);
             b.expr(E::Compose { ty: v3t, components: vec![x, ct, z] }, sp)
         }
-        Projection::Camera | Projection::Cubemap => {
+        Projection::Camera | Projection::CubeFace(_) => {
             // Godot's camera ray: ((2u − 1)·t·aspect, (1 − 2v)·t, −1), rotated by the basis.
             let (one, two) = (f(&mut b, 1.0), f(&mut b, 2.0));
             let u2 = bin(&mut b, Bo::Multiply, u, two);
@@ -697,10 +654,13 @@ fn cube_basis(lw: &mut Lowerer, b: &mut FnBuilder, global: Handle<GlobalVariable
     let ge = &mut lw.module.global_expressions;
     let faces = (0..6)
         .map(|face| {
-            let cols = cube_face_basis(face)
+            let basis = skycore::cube_face_basis(face);
+            let cols = [basis.x_axis, basis.y_axis, basis.z_axis]
                 .iter()
                 .map(|c| {
-                    let comps = c.iter().map(|&x| ge.append(E::Literal(Literal::F32(x)), sp)).collect();
+                    // The axes are exact: 0 and ±1.
+                    let comps =
+                        c.to_array().iter().map(|&x| ge.append(E::Literal(Literal::F32(x as f32)), sp)).collect();
                     ge.append(E::Compose { ty: v3, components: comps }, sp)
                 })
                 .collect();

@@ -1,7 +1,8 @@
 //! The converged mode: the Freeman sky in f64 with many samples, standing for the integral the
 //! shader's quadrature approximates, and a check of how converged it is.
 
-use crate::{FreemanParams, Projection, Scene};
+use crate::FreemanParams;
+use skycore::{Projection, Scene};
 
 /// Floor of the relative change: a channel's change is |a − b| / max(|b|, floor). The same
 /// default floor as `gdsky compare`.

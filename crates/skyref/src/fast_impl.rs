@@ -9,9 +9,10 @@
 /// Instantiates the fast Freeman sky for one scalar type and its glam vector type.
 macro_rules! freeman_fast {
     ($T:ident, $V3:ident) => {
-        use crate::{FreemanParams, Projection, Scene};
+        use crate::FreemanParams;
         use glam::$V3;
         use rayon::prelude::*;
+        use skycore::{Projection, Scene};
 
         #[allow(clippy::unnecessary_cast)]
         fn s(x: f64) -> $T {
@@ -516,7 +517,7 @@ macro_rules! freeman_fast {
                 return Vec::new();
             }
             render_with(params, scene, projection, width, height, |u, sun, d| {
-                u.sky_lut(table, scene.light_enabled, sun, s(scene.position.y), d)
+                u.sky_lut(table, scene.sun().enabled, sun, s(scene.camera.position.y), d)
             })
         }
 
@@ -530,7 +531,7 @@ macro_rules! freeman_fast {
             height: u32,
         ) -> Vec<[$T; 4]> {
             render_with(params, scene, projection, width, height, |u, sun, d| {
-                u.sky(scene.light_enabled, sun, s(scene.position.y), d)
+                u.sky(scene.sun().enabled, sun, s(scene.camera.position.y), d)
             })
         }
 
@@ -547,7 +548,7 @@ macro_rules! freeman_fast {
                 return Vec::new();
             }
             let uniforms = Uniforms::from(params);
-            let sun = v3(scene.light0_direction());
+            let sun = v3(scene.sun().direction());
             let w = width as usize;
             let mut out = vec![[0.0; 4]; w * height as usize];
             out.par_chunks_mut(w).enumerate().for_each(|(y, row)| {

@@ -102,10 +102,11 @@
 //! ## Example
 //!
 //! ```
-//! use skyref::{FreemanParams, Projection, Scene};
+//! use skycore::{Projection, Scene};
+//! use skyref::FreemanParams;
 //!
 //! let params = FreemanParams::default();
-//! let scene = Scene { sun_elevation_deg: 20.0, ..Scene::default() };
+//! let scene = Scene::default().with_sun(20.0, 0.0);
 //! let image = skyref::f32::render(&params, &scene, Projection::Panorama, 16, 8);
 //! assert_eq!(image.len(), 16 * 8);
 //! let zenith = skyref::f64::sky_color(&params, &scene, glam::DVec3::Y);
@@ -121,7 +122,9 @@ mod params;
 mod precision;
 pub mod truth;
 
-pub use params::{FreemanParams, Projection, Scene, UniformMut, cube_face_basis};
+pub use params::{FreemanParams, UniformMut};
+/// The scene vocabulary skyref's renderers take, from `skycore`.
+pub use skycore::{Projection, Scene, cube_face_basis};
 
 /// The Freeman sky in single precision (`f32`, `glam::Vec3`, `glam::Vec2`): what a GPU computes.
 pub mod f32 {

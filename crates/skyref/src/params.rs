@@ -4,7 +4,7 @@
 //! Everything here is `f64`; each precision module rounds these values to its own scalar type,
 //! as a host does when it fills the f32 uniform buffers of the converted shader.
 
-use glam::{DMat3, DVec3};
+use glam::DVec3;
 
 /// The uniforms of `freeman_sky.gdshader`, one public field per `uniform`, with the shader's
 /// names and declaration order.
@@ -163,100 +163,4 @@ impl FreemanParams {
     pub fn with_samples(self, view_samples: i32, sun_samples: i32) -> Self {
         Self { view_samples, sun_samples, ..self }
     }
-}
-
-/// Godot's built-ins that the Freeman sky reads, plus the camera used by
-/// [`Projection::Camera`].
-///
-/// The conventions are Godot's (see the workspace's design notes): the sun is given by
-/// elevation and azimuth in degrees, the camera by a vertical field of view, a yaw and a pitch.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Scene {
-    /// Sun elevation above the horizon, in degrees (90 is the zenith).
-    pub sun_elevation_deg: f64,
-    /// Sun azimuth in degrees: 0 toward −Z, 90 toward +X.
-    pub sun_azimuth_deg: f64,
-    /// `LIGHT0_ENABLED`: with no light the Freeman sky is black.
-    pub light_enabled: bool,
-    /// Camera `POSITION` in metres. Only `.y` matters to the Freeman sky.
-    pub position: DVec3,
-    /// Vertical field of view of the camera projection, in degrees (default 90).
-    pub fov_deg: f64,
-    /// Camera yaw in degrees (rotation about +Y; 90 turns the view from −Z to −X).
-    pub yaw_deg: f64,
-    /// Camera pitch in degrees (rotation about +X; 90 looks straight up).
-    pub pitch_deg: f64,
-}
-
-impl Default for Scene {
-    /// Sun at 10° elevation toward −Z, light on, camera at the origin looking toward −Z with a
-    /// 90° vertical field of view.
-    fn default() -> Self {
-        Self {
-            sun_elevation_deg: 10.0,
-            sun_azimuth_deg: 0.0,
-            light_enabled: true,
-            position: DVec3::ZERO,
-            fov_deg: 90.0,
-            yaw_deg: 0.0,
-            pitch_deg: 0.0,
-        }
-    }
-}
-
-impl Scene {
-    /// `LIGHT0_DIRECTION`, the unit vector toward the sun:
-    /// (cos e · sin a, sin e, −cos e · cos a).
-    pub fn light0_direction(&self) -> DVec3 {
-        let (se, ce) = self.sun_elevation_deg.to_radians().sin_cos();
-        let (sa, ca) = self.sun_azimuth_deg.to_radians().sin_cos();
-        DVec3::new(ce * sa, se, -ce * ca)
-    }
-
-    /// The camera basis, Godot's Euler YXZ with no roll: R_y(yaw) · R_x(pitch). Its columns are
-    /// the camera's right, up and back (+Z) axes in world space.
-    pub fn camera_basis(&self) -> DMat3 {
-        DMat3::from_rotation_y(self.yaw_deg.to_radians()) * DMat3::from_rotation_x(self.pitch_deg.to_radians())
-    }
-
-    /// tan(fov / 2) for the vertical field of view (`tan_half_fov` of the converted shader's
-    /// built-ins).
-    pub fn tan_half_fov(&self) -> f64 {
-        (self.fov_deg.to_radians() * 0.5).tan()
-    }
-}
-
-/// How pixel (x, y) of a W×H image becomes EYEDIR, exactly as the converted shader's fragment
-/// entries do it (pixel centres u = (x+½)/W, v = (y+½)/H, row 0 at the top).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
-pub enum Projection {
-    /// `fs_panorama`, the inverse of SKY_COORDS: φ = 2πu, θ = πv,
-    /// EYEDIR = (sin θ sin φ, cos θ, −sin θ cos φ) (not renormalised).
-    #[default]
-    Panorama,
-    /// `fs_camera`: EYEDIR = normalize(basis · ((2u−1)·t·W/H, (1−2v)·t, −1)) with
-    /// t = tan(fov/2) and the basis of [`Scene::camera_basis`].
-    Camera,
-    /// `fs_cubemap`, one face of Godot's radiance cubemap (0..6: +X, −X, +Y, −Y, +Z, −Z):
-    /// the camera formula with t = 1 and the face's basis ([`cube_face_basis`]); the scene's
-    /// camera is not used.
-    CubeFace(u8),
-}
-
-/// The basis Godot 4.3–4.5 renders cubemap face `face` with (`Basis::looking_at(normal, up)`
-/// for the normals +X, −X, +Y, −Y, +Z, −Z with ups −Y, −Y, +Z, −Z, −Y, −Y), as columns
-/// x, y, z. Faces above 5 are taken as 5. gdsky's wrapper bakes the same table in f32; a test
-/// in skyrun holds the two together.
-pub fn cube_face_basis(face: u8) -> DMat3 {
-    let (target, up) = match face {
-        0 => (DVec3::X, DVec3::NEG_Y),
-        1 => (DVec3::NEG_X, DVec3::NEG_Y),
-        2 => (DVec3::Y, DVec3::Z),
-        3 => (DVec3::NEG_Y, DVec3::NEG_Z),
-        4 => (DVec3::Z, DVec3::NEG_Y),
-        _ => (DVec3::NEG_Z, DVec3::NEG_Y),
-    };
-    let z = -target;
-    let x = up.cross(z);
-    DMat3::from_cols(x, z.cross(x), z)
 }

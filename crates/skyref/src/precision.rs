@@ -8,9 +8,10 @@
 /// `pub mod f64 { … }`.
 macro_rules! freeman_sky {
     ($T:ident, $V2:ident, $V3:ident, $M3:ident) => {
-        use crate::{FreemanParams, Projection, Scene};
+        use crate::FreemanParams;
         use glam::{$M3, $V2, $V3};
         use rayon::prelude::*;
+        use skycore::{Projection, Scene};
 
         /// The scalar type of this precision.
         pub type Scalar = $T;
@@ -156,9 +157,9 @@ macro_rules! freeman_sky {
             /// computed in f64 and rounded, as a host fills the built-ins buffer.
             pub fn new(scene: &Scene, eyedir: $V3) -> Self {
                 Self {
-                    light0_enabled: scene.light_enabled,
-                    light0_direction: v3(scene.light0_direction()),
-                    position: v3(scene.position),
+                    light0_enabled: scene.sun().enabled,
+                    light0_direction: v3(scene.sun().direction()),
+                    position: v3(scene.camera.position),
                     eyedir,
                 }
             }
@@ -529,8 +530,8 @@ macro_rules! freeman_sky {
                 }
                 Projection::Camera | Projection::CubeFace(_) => {
                     let (b, t) = match projection {
-                        Projection::CubeFace(face) => (crate::cube_face_basis(face), 1.0),
-                        _ => (scene.camera_basis(), scene.tan_half_fov()),
+                        Projection::CubeFace(face) => (skycore::cube_face_basis(face), 1.0),
+                        _ => (scene.camera.basis(), scene.camera.tan_half_fov()),
                     };
                     let basis = $M3::from_cols(v3(b.x_axis), v3(b.y_axis), v3(b.z_axis));
                     let t = s(t);

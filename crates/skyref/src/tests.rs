@@ -1,9 +1,10 @@
 //! Unit tests of the reference: defaults against the fixture's text, conventions, f32 versus
 //! f64, physical sanity checks and the converged mode.
 
+use crate::FreemanParams;
 use crate::converged::{Converged, REL_FLOOR, convergence_check, relative_changes, summarize};
-use crate::{FreemanParams, Projection, Scene};
 use glam::{DVec3, Vec3};
+use skycore::{Projection, Scene};
 
 fn fixture_text() -> String {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/freeman_sky.gdshader");
@@ -82,8 +83,7 @@ fn defaults_match_fixture() {
 
 #[test]
 fn sun_direction_convention() {
-    let dir =
-        |e: f64, a: f64| Scene { sun_elevation_deg: e, sun_azimuth_deg: a, ..Scene::default() }.light0_direction();
+    let dir = |e: f64, a: f64| Scene::default().with_sun(e, a).sun().direction();
     assert!((dir(0.0, 0.0) - DVec3::NEG_Z).length() < 1e-15);
     assert!((dir(0.0, 90.0) - DVec3::X).length() < 1e-15);
     assert!((dir(90.0, 37.0) - DVec3::Y).length() < 1e-15);
@@ -117,7 +117,7 @@ fn panorama_eyedir_inverts_sky_coords() {
 #[test]
 fn camera_eyedir_follows_godot() {
     let eye = |yaw: f64, pitch: f64, x: u32, y: u32, w: u32, h: u32| {
-        let scene = Scene { yaw_deg: yaw, pitch_deg: pitch, ..Scene::default() };
+        let scene = Scene::default().with_view(yaw, pitch);
         crate::f64::eyedir(&scene, Projection::Camera, x, y, w, h)
     };
     // The centre of an odd-sized image looks toward −Z at yaw 0, pitch 0.
@@ -142,7 +142,7 @@ fn camera_eyedir_follows_godot() {
 }
 
 fn scene_10deg_1m() -> Scene {
-    Scene { sun_elevation_deg: 10.0, sun_azimuth_deg: 0.0, position: DVec3::new(0.0, 1.0, 0.0), ..Scene::default() }
+    Scene::default().with_sun(10.0, 0.0).with_position(DVec3::new(0.0, 1.0, 0.0))
 }
 
 /// f32 against f64 at defaults, 64×32 panorama, sun 10°, camera at 1 m. Measured (this test
@@ -166,7 +166,7 @@ fn f32_vs_f64_at_defaults() {
 #[test]
 fn light_disabled_is_black() {
     let params = FreemanParams::default();
-    let scene = Scene { light_enabled: false, ..scene_10deg_1m() };
+    let scene = scene_10deg_1m().with_sun_enabled(false);
     for projection in [Projection::Panorama, Projection::Camera] {
         let a = crate::f32::render(&params, &scene, projection, 16, 8);
         assert!(a.iter().all(|p| *p == [0.0; 4]));
@@ -192,7 +192,7 @@ fn alpha_is_zero_and_colours_finite() {
 #[test]
 fn sun_disk_at_zenith() {
     let params = FreemanParams::default();
-    let scene = Scene { sun_elevation_deg: 90.0, ..scene_10deg_1m() };
+    let scene = scene_10deg_1m().with_sun(90.0, 0.0);
     let u = crate::f64::Uniforms::from(&params);
     let origin = DVec3::new(0.0, params.planet_radius + 1.0, 0.0);
     let transmittance = u.get_transmittance(origin, DVec3::Y, params.atmosphere_height - 1.0, params.view_samples);
@@ -225,7 +225,7 @@ fn sun_disk_at_zenith() {
 #[test]
 fn panorama_symmetric_about_sun_azimuth() {
     let params = FreemanParams::default();
-    let scene = Scene { sun_azimuth_deg: 135.0, sun_elevation_deg: 5.0, ..scene_10deg_1m() };
+    let scene = scene_10deg_1m().with_sun(5.0, 135.0);
     let (w, h) = (64usize, 32usize);
     let img = crate::f64::render(&params, &scene, Projection::Panorama, w as u32, h as u32);
     let img32 = crate::f32::render(&params, &scene, Projection::Panorama, w as u32, h as u32);
@@ -250,7 +250,7 @@ fn panorama_symmetric_about_sun_azimuth() {
 #[test]
 fn brightest_pixel_is_the_sun() {
     let params = FreemanParams::default();
-    let scene = Scene { sun_elevation_deg: 30.0, sun_azimuth_deg: 90.0, ..scene_10deg_1m() };
+    let scene = scene_10deg_1m().with_sun(30.0, 90.0);
     let (w, h) = (72u32, 36u32);
     let img = crate::f64::render(&params, &scene, Projection::Panorama, w, h);
     let (i, _) = img.iter().enumerate().max_by(|a, b| a.1[0].total_cmp(&b.1[0])).expect("not empty");
@@ -262,7 +262,7 @@ fn brightest_pixel_is_the_sun() {
 #[test]
 fn sky_is_blue_and_ground_is_dim() {
     let params = FreemanParams::default();
-    let scene = Scene { sun_elevation_deg: 45.0, ..scene_10deg_1m() };
+    let scene = scene_10deg_1m().with_sun(45.0, 0.0);
     let zenith = crate::f64::sky_color(&params, &scene, DVec3::Y);
     assert!(zenith.z > zenith.y && zenith.y > zenith.x, "{zenith}");
     let ground = crate::f64::sky_color(&params, &scene, DVec3::NEG_Y);
@@ -287,10 +287,10 @@ fn odd_inputs_do_not_panic() {
     let zero = crate::f64::render(&odd[0], &scene, Projection::Panorama, 8, 4);
     assert!(zero.iter().all(|p| p.iter().all(|c| c.is_finite())));
     assert!(zero[..8].iter().all(|p| p[..3] == [0.0; 3]), "upper row is black");
-    let nan_scene = Scene { position: DVec3::NAN, ..scene };
+    let nan_scene = scene.with_position(DVec3::NAN);
     // maxNum: a NaN altitude clamps to 0.5 m, as on the GPU.
     let a = crate::f64::sky_color(&FreemanParams::default(), &nan_scene, DVec3::Y);
-    let b = crate::f64::sky_color(&FreemanParams::default(), &Scene { position: DVec3::ZERO, ..scene }, DVec3::Y);
+    let b = crate::f64::sky_color(&FreemanParams::default(), &scene.with_position(DVec3::ZERO), DVec3::Y);
     assert_eq!(a, b);
     assert!(crate::f32::render(&FreemanParams::default(), &scene, Projection::Camera, 0, 7).is_empty());
     assert!(crate::f64::render(&FreemanParams::default(), &scene, Projection::Panorama, 7, 0).is_empty());
@@ -307,7 +307,7 @@ fn half_samples_for_ground_rays() {
     let u3 = crate::f64::Uniforms::from(&p3);
     let u2 = crate::f64::Uniforms::from(&p2);
     let origin = DVec3::new(0.0, p3.planet_radius + 1.0, 0.0);
-    let sun = scene.light0_direction();
+    let sun = scene.sun().direction();
     assert_eq!(
         u3.integrate_radiance(origin, down, 1.0, 3 / 2, sun),
         u2.integrate_radiance(origin, down, 1.0, 2 / 2, sun)
@@ -383,8 +383,7 @@ fn f32_vs_f64_survey() {
     let params = FreemanParams::default();
     for altitude in [1.0, 1000.0, 20000.0] {
         for elevation in [-6.0, -2.0, 0.0, 2.0, 10.0, 45.0, 90.0] {
-            let scene =
-                Scene { sun_elevation_deg: elevation, position: DVec3::new(0.0, altitude, 0.0), ..Scene::default() };
+            let scene = Scene::default().with_sun(elevation, 0.0).with_position(DVec3::new(0.0, altitude, 0.0));
             let a = crate::f32::render(&params, &scene, Projection::Panorama, 128, 64);
             let b = crate::f64::render(&params, &scene, Projection::Panorama, 128, 64);
             let mut rel = relative_changes(&a, &b, REL_FLOOR);
@@ -407,7 +406,7 @@ fn f32_vs_f64_survey() {
 fn truth_converges() {
     let params = FreemanParams::default();
     for (sun, bound) in [(10.0, 1e-6), (-4.0, 1e-5)] {
-        let scene = Scene { sun_elevation_deg: sun, ..Scene::default() };
+        let scene = Scene::default().with_sun(sun, 0.0);
         let (max, _, _) = crate::truth::convergence_check(&params, &scene, &crate::truth::Truth::default(), 16, 8);
         assert!(max < bound, "sun {sun}°: the truth moves by {max:.2e} when its steps double");
     }

@@ -39,10 +39,11 @@
 //! The convergence is measured by [`convergence_check`] (steps against twice the steps, both
 //! extrapolated) and recorded in the crate documentation.
 
+use crate::FreemanParams;
 use crate::converged::{REL_FLOOR, relative_changes, summarize};
-use crate::{FreemanParams, Projection, Scene};
 use glam::DVec3;
 use rayon::prelude::*;
+use skycore::{Projection, Scene};
 
 /// Floor for the scale heights and the ozone width, in metres (as in `freeman_stable`).
 const MIN_LENGTH: f64 = 1e-3;
@@ -312,12 +313,12 @@ fn cylinder_crossings(path: &Path, sun: DVec3, radius: f64) -> Vec<f64> {
 
 /// One evaluation of the pixel with `steps` midpoint steps per piece: (colour).
 fn color_with_steps(model: &Model, scene: &Scene, eyedir: DVec3, steps: u32, panels: u32) -> DVec3 {
-    if !scene.light_enabled {
+    if !scene.sun().enabled {
         return DVec3::ZERO;
     }
     let p = &model.params;
-    let sun = scene.light0_direction();
-    let altitude = (scene.position.y + p.base_altitude).max(0.5).min(model.height);
+    let sun = scene.sun().direction();
+    let altitude = (scene.camera.position.y + p.base_altitude).max(0.5).min(model.height);
     let view = Path { origin: DVec3::new(0.0, model.radius + altitude, 0.0), direction: eyedir };
     let ground = view.sphere_crossings(model.radius);
     let hits_ground = ground.get(1).is_some_and(|far| *far > 0.0);

@@ -75,7 +75,7 @@ fn render_time(c: &mut Criterion) {
     eprintln!("adapter: {}", gpu.adapter_info());
 
     let (width, height) = (256, 128);
-    let scene = Scene { sun_azimuth_deg: 30.0, position: glam::DVec3::new(0.0, 1.0, 0.0), ..Scene::default() };
+    let scene = Scene::default().with_sun(10.0, 30.0).with_position(glam::DVec3::new(0.0, 1.0, 0.0));
     let builtins = SkyBuiltins::from_scene(&scene, width, height);
     // The hand port with only gdsky's maxNum emulation put back in the hot loop: if it runs as
     // fast as the converted shader, that emulation explains the difference.

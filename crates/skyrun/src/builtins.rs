@@ -127,28 +127,25 @@ impl SkyBuiltins {
     pub const SIZE: usize = 288;
 
     /// The built-ins for rendering `scene` into a `width`×`height` target, as skyref's
-    /// renderer sees the same scene: camera basis and tan(fov/2) from the scene (computed in
-    /// f64, rounded to f32), light 0 = the sun (direction [`skyref::Scene::light0_direction`],
-    /// energy 1, white, size 0, enabled as `scene.light_enabled`), lights 1–3 off, luminance
-    /// multiplier 1, full pass, time 0.
-    pub fn from_scene(scene: &skyref::Scene, width: u32, height: u32) -> Self {
-        let basis = scene.camera_basis();
+    /// renderer sees the same scene: the camera basis, position and tan(fov/2) (computed in f64,
+    /// rounded to f32), TIME, and every light (direction computed in f64 from its elevation and
+    /// azimuth, energy, colour, size in radians, enabled); luminance multiplier 1, full pass.
+    pub fn from_scene(scene: &skycore::Scene, width: u32, height: u32) -> Self {
+        let basis = scene.camera.basis();
         let col = |c: glam::DVec3| [c.x as f32, c.y as f32, c.z as f32];
-        let sun = scene.light0_direction();
-        let mut lights = [SkyLight::default(); 4];
-        lights[0] = SkyLight {
-            direction: col(sun),
-            energy: 1.0,
-            color: [1.0, 1.0, 1.0],
-            size: 0.0,
-            enabled: scene.light_enabled,
-        };
+        let lights = scene.lights.map(|light| SkyLight {
+            direction: col(light.direction()),
+            energy: light.energy,
+            color: light.color,
+            size: light.size_rad() as f32,
+            enabled: light.enabled,
+        });
         Self {
             camera_basis: [col(basis.x_axis), col(basis.y_axis), col(basis.z_axis)],
-            position: col(scene.position),
-            time: 0.0,
+            position: col(scene.camera.position),
+            time: scene.time as f32,
             screen_size: [width as f32, height as f32],
-            tan_half_fov: scene.tan_half_fov() as f32,
+            tan_half_fov: scene.camera.tan_half_fov() as f32,
             render_pass: RenderPass::Full,
             luminance_multiplier: 1.0,
             cube_face: 0,

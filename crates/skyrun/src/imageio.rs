@@ -1,7 +1,7 @@
 //! Image files: OpenEXR for exact f32 data, PNG previews and error heatmaps for people.
 //!
 //! Every writer encodes the whole file in memory first and then replaces the target in one
-//! rename (see [`crate::safe_io`]), so a failed or interrupted write never leaves a truncated
+//! rename (see `skycore::io`), so a failed or interrupted write never leaves a truncated
 //! file, or a file half old and half new, where a reference image used to be; the target must be
 //! a regular file, absent, or a symbolic link to one.
 
@@ -108,10 +108,10 @@ fn io_error(path: &Path, action: &'static str, source: io::Error) -> ImageError 
     ImageError::Io { path: path.to_owned(), action, source }
 }
 
-/// Writes an encoded image with the one safe writer, [`crate::safe_io::write_atomically`]
+/// Writes an encoded image with the one safe writer, [`skycore::io::write_atomically`]
 /// (through symbolic links, never over a directory, device, FIFO or socket).
 fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), ImageError> {
-    crate::safe_io::write_atomically(path, bytes).map_err(|e| io_error(path, "write", e))
+    skycore::io::write_atomically(path, bytes).map_err(|e| io_error(path, "write", e))
 }
 
 /// Writes `image` as OpenEXR: one layer, channels R, G, B, A as 32-bit floats, scanlines
@@ -194,10 +194,10 @@ struct Pixels {
 /// subsampled colour channels, no R/G/B (the message lists the channels that are there),
 /// images over 2²⁷ pixels. Truncated or corrupt files are errors too, never panics (a panic
 /// inside the exr crate is caught and returned as an error). The file is read with
-/// [`crate::safe_io::read_limited`]: a regular file (a FIFO, a device, a socket or a directory is
+/// [`skycore::io::read_limited`]: a regular file (a FIFO, a device, a socket or a directory is
 /// refused before it is opened) of at most [`MAX_EXR_BYTES`].
 pub fn read_exr(path: &Path) -> Result<Image, ImageError> {
-    let bytes = crate::safe_io::read_limited(path, MAX_EXR_BYTES).map_err(|e| io_error(path, "read", e))?;
+    let bytes = skycore::io::read_limited(path, MAX_EXR_BYTES).map_err(|e| io_error(path, "read", e))?;
     decode_exr(path, &bytes)
 }
 

@@ -47,7 +47,7 @@
 //!   samplers built from the uniforms' filter and repeat hints; [`read_texture`] reads OpenEXR
 //!   (f32) and PNG (8-bit, sRGB with `source_color`) files, [`read_cube`] cube maps (six faces,
 //!   a cross or Godot's grids) and [`read_volume`] 3D textures (slices or a grid); a sampler
-//!   whose filter hint asks for mipmaps gets Godot's box-filtered chain ([`wants_mipmaps`]). A float texture the module only
+//!   whose filter hint asks for mipmaps gets Godot's box-filtered chain. A float texture the module only
 //!   loads from (`texelFetch`) is declared non-filterable, so 32-bit floats bind to it. Storage buffers, comparison samplers and binding
 //!   arrays are refused by name ([`bindings::BindingError`]).
 //! * [`material_with_defaults`] fills the material block of any shader from its own defaults
@@ -55,12 +55,7 @@
 //! * [`write_exr`] / [`read_exr`] (RGBA f32, ZIP, row 0 at the top, written atomically),
 //!   [`write_png_preview`] (Bruneton's demo tone map), [`write_heatmap_png`] (log-scale relative
 //!   error), [`write_side_by_side_png`].
-//! * [`safe_io`]: the one atomic writer of the workspace (every `gdsky` command and
-//!   `gdsky::build` write through it: through symbolic links to their target, never over a
-//!   directory, device, FIFO or socket), the output checks commands run before any work, and
-//!   bounded reading of regular files only. It lives here because skyrun is the lowest crate
-//!   that writes files (its images) and that both the CLI and the build-script API depend on;
-//!   the reading half comes from `gdshader`, which reads shaders below everything else.
+//! * Files are read and written through `skycore::io` (bounded reading, the one atomic writer).
 //! * [`check_render_size`]: the largest view the renderer can draw ([`MAX_RENDER_SIDE`] a side,
 //!   [`MAX_RENDER_PIXELS`]), the one limit `--size` and every command share.
 //! * [`compare`] reduces two images to relative-error statistics over RGB
@@ -125,7 +120,6 @@ mod material;
 mod metrics;
 mod passthrough;
 mod render;
-pub mod safe_io;
 mod skip;
 mod textures;
 mod wide;
@@ -145,12 +139,12 @@ pub use material::{
 pub use metrics::{
     Metrics, PixelDiff, STATS_GRID, Stats, compare, compare_stats, luminance, region_stats, worst_pixels,
 };
-pub use render::{RenderError, Rendered, SkyShader, SubPasses, fragment_entry, render, sub_pass_size};
+pub use render::{RenderError, Rendered, SkyShader, SubPasses, render, sub_pass_size};
 pub use skip::{MAX_MASK_BYTES, MaskError, OCCLUDED, Occluder, RenderOptions, SkyResolution, UpsampleFilter};
-pub use skyref::Projection;
+pub use skycore::{Projection, Scene};
 pub use textures::{
     GODOT_VOLUME_GRID, MAX_ASSEMBLED_BYTES, MAX_TEXTURE_FILE_BYTES, MAX_TEXTURE_SIDE, MAX_VOLUME_SIDE, TexelFormat,
-    TextureData, TextureError, TextureShape, check_texture, read_cube, read_texture, read_volume, wants_mipmaps,
+    TextureData, TextureError, TextureShape, check_texture, read_cube, read_texture, read_volume, texture_from_image,
 };
 pub use wide::{F64Error, F64Sky, render_f64};
 

@@ -9,50 +9,53 @@ use gdshader::check::types::{Scalar, Type};
 use gdsky_naga::{Lowered, MATERIAL_GROUP};
 use std::fmt;
 
-/// A value for one non-array, non-sampler uniform.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum UniformValue {
-    /// `float`
-    Float(f32),
-    /// `int`
-    Int(i32),
-    /// `uint`
-    UInt(u32),
-    /// `bool` (travels as a `u32`, 0 or 1)
-    Bool(bool),
-    /// `vec2`
-    Vec2([f32; 2]),
-    /// `vec3`
-    Vec3([f32; 3]),
-    /// `vec4`
-    Vec4([f32; 4]),
+pub use skycore::UniformValue;
+
+/// The shader type a value fits: its scalar or vector type, or for an array, the element's
+/// scalar type and the count.
+fn shader_type(value: &UniformValue) -> Type {
+    match value {
+        UniformValue::Float(_) => Type::FLOAT,
+        UniformValue::Int(_) => Type::INT,
+        UniformValue::UInt(_) => Type::UINT,
+        UniformValue::Bool(_) => Type::BOOL,
+        UniformValue::Vec2(_) => Type::Vector(Scalar::Float, 2),
+        UniformValue::Vec3(_) => Type::Vector(Scalar::Float, 3),
+        UniformValue::Vec4(_) => Type::Vector(Scalar::Float, 4),
+        UniformValue::IVec2(_) => Type::Vector(Scalar::Int, 2),
+        UniformValue::IVec3(_) => Type::Vector(Scalar::Int, 3),
+        UniformValue::IVec4(_) => Type::Vector(Scalar::Int, 4),
+        UniformValue::FloatArray(v) => Type::Array(Box::new(Type::FLOAT), v.len() as u32),
+        UniformValue::IntArray(v) => Type::Array(Box::new(Type::INT), v.len() as u32),
+    }
 }
 
-impl UniformValue {
-    /// The shader type this value fits.
-    fn shader_type(&self) -> Type {
-        match self {
-            UniformValue::Float(_) => Type::FLOAT,
-            UniformValue::Int(_) => Type::INT,
-            UniformValue::UInt(_) => Type::UINT,
-            UniformValue::Bool(_) => Type::BOOL,
-            UniformValue::Vec2(_) => Type::Vector(Scalar::Float, 2),
-            UniformValue::Vec3(_) => Type::Vector(Scalar::Float, 3),
-            UniformValue::Vec4(_) => Type::Vector(Scalar::Float, 4),
-        }
+/// Whether a value of type `given` fits a uniform of type `slot`: the same type, or an int
+/// array for a uint array (the elements travel as their bit patterns).
+fn fits(slot: &Type, given: &Type) -> bool {
+    match (slot, given) {
+        (Type::Array(s, n), Type::Array(g, m)) => n == m && (s == g || (**s == Type::UINT && **g == Type::INT)),
+        _ => slot == given,
     }
+}
 
-    /// Writes the value at `offset`.
-    fn write(&self, bytes: &mut [u8], offset: usize) {
-        match *self {
-            UniformValue::Float(v) => put_f32s(bytes, offset, &[v]),
-            UniformValue::Int(v) => put_i32(bytes, offset, v),
-            UniformValue::UInt(v) => put_u32(bytes, offset, v),
-            UniformValue::Bool(v) => put_u32(bytes, offset, u32::from(v)),
-            UniformValue::Vec2(v) => put_f32s(bytes, offset, &v),
-            UniformValue::Vec3(v) => put_f32s(bytes, offset, &v),
-            UniformValue::Vec4(v) => put_f32s(bytes, offset, &v),
+/// Writes `value` at `offset`; array elements `stride` bytes apart.
+fn write_value(value: &UniformValue, bytes: &mut [u8], offset: usize, stride: usize) {
+    match value {
+        UniformValue::Float(v) => put_f32s(bytes, offset, &[*v]),
+        UniformValue::Int(v) => put_i32(bytes, offset, *v),
+        UniformValue::UInt(v) => put_u32(bytes, offset, *v),
+        UniformValue::Bool(v) => put_u32(bytes, offset, u32::from(*v)),
+        UniformValue::Vec2(v) => put_f32s(bytes, offset, v),
+        UniformValue::Vec3(v) => put_f32s(bytes, offset, v),
+        UniformValue::Vec4(v) => put_f32s(bytes, offset, v),
+        UniformValue::IVec2(v) => v.iter().enumerate().for_each(|(i, c)| put_i32(bytes, offset + 4 * i, *c)),
+        UniformValue::IVec3(v) => v.iter().enumerate().for_each(|(i, c)| put_i32(bytes, offset + 4 * i, *c)),
+        UniformValue::IVec4(v) => v.iter().enumerate().for_each(|(i, c)| put_i32(bytes, offset + 4 * i, *c)),
+        UniformValue::FloatArray(v) => {
+            v.iter().enumerate().for_each(|(i, c)| put_f32s(bytes, offset + stride * i, &[*c]))
         }
+        UniformValue::IntArray(v) => v.iter().enumerate().for_each(|(i, c)| put_i32(bytes, offset + stride * i, *c)),
     }
 }
 
@@ -107,15 +110,15 @@ pub fn material_bytes(lowered: &Lowered, values: &[(&str, UniformValue)]) -> Res
             .get(*name)
             .filter(|slot| slot.group == MATERIAL_GROUP)
             .ok_or_else(|| MaterialError::NoSuchUniform((*name).to_owned()))?;
-        let given = value.shader_type();
-        if slot.ty != given {
+        let given = shader_type(value);
+        if !fits(&slot.ty, &given) {
             return Err(MaterialError::TypeMismatch {
                 name: (*name).to_owned(),
                 expected: slot.ty.display(&[]).to_string(),
                 given: given.display(&[]).to_string(),
             });
         }
-        value.write(&mut bytes, slot.offset as usize);
+        write_value(value, &mut bytes, slot.offset as usize, slot.stride.unwrap_or(0) as usize);
     }
     Ok(bytes)
 }

@@ -10,7 +10,7 @@ use crate::bindings::{self, Binding, BindingError, BindingKind};
 use crate::builtins::{RenderPass, SkyBuiltins};
 use crate::gpu::Gpu;
 use crate::skip::{OCCLUDED, Occluder, RenderOptions, SkyResolution, UPSAMPLE_WGSL, UpsampleFilter};
-use skyref::Projection;
+use skycore::Projection;
 use std::collections::HashMap;
 use std::fmt;
 use std::sync::{Mutex, mpsc};
@@ -97,15 +97,6 @@ impl std::error::Error for RenderError {}
 impl From<BindingError> for RenderError {
     fn from(e: BindingError) -> Self {
         RenderError::Binding(e)
-    }
-}
-
-/// The fragment entry point of the converted shader for a projection.
-pub fn fragment_entry(projection: Projection) -> &'static str {
-    match projection {
-        Projection::Panorama => "fs_panorama",
-        Projection::Camera => "fs_camera",
-        Projection::CubeFace(_) => "fs_cubemap",
     }
 }
 
@@ -382,7 +373,7 @@ impl SkyShader {
     /// module does not declare (a uniform the shader never reads is pruned) is accepted and
     /// unused.
     ///
-    /// A uniform whose filter hint asks for mipmaps (`filter_*_mipmap*`, [`crate::wants_mipmaps`])
+    /// A uniform whose filter hint asks for mipmaps (`filter_*_mipmap*`, [`TextureBinding::wants_mipmaps`](gdsky_naga::reflect::TextureBinding::wants_mipmaps))
     /// gets the full mip chain, Godot's box filter (textures/mipmap.rs), and so does a texture
     /// marked [`crate::TextureData::with_mipmaps`] under any mipmap filter (the default
     /// `linear_mipmap` included); others one level.
@@ -397,8 +388,7 @@ impl SkyShader {
         // A hint asks for mipmaps; a texture whose source has its own (a NoiseTexture2D) uses them
         // under any mipmap filter, Godot's default one included.
         let slot = self.material_textures.iter().find(|t| t.name == name);
-        let mipmaps =
-            slot.is_some_and(|t| crate::wants_mipmaps(t) || (data.mipmapped() && t.filter.contains("mipmap")));
+        let mipmaps = slot.is_some_and(|t| t.wants_mipmaps() || (data.mipmapped() && t.filter.contains("mipmap")));
         let view = scoped(gpu, || crate::textures::upload(gpu, name, data, mipmaps))
             .map_err(|e| crate::TextureError::Wgpu(e.to_string()))?;
         self.provided.insert(key, view);
@@ -642,7 +632,7 @@ impl SkyShader {
         options: &RenderOptions<'_>,
     ) -> (wgpu::Buffer, wgpu::SubmissionIndex, u32, Option<(wgpu::Buffer, usize)>) {
         let device = &gpu.device;
-        let entry = fragment_entry(projection);
+        let entry = projection.entry_point();
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("sky") });
         // Two timestamps per pass (at most quarter, half, full, upsampling).
         const MAX_PASSES: u32 = 4;

@@ -10,6 +10,7 @@
 //! * [`SkyResolution`]: the whole pipeline (Godot's own sub-passes scaled with it) at W/2×H/2
 //!   or W/4×H/4, then upsampled on the GPU ([`UpsampleFilter`]).
 
+pub use skycore::SkyResolution;
 use std::fmt;
 use std::path::{Path, PathBuf};
 
@@ -18,48 +19,6 @@ pub const OCCLUDED: [f32; 4] = [0.0, 0.0, 0.0, 1.0];
 
 /// The largest mask file read (a 16-megapixel RGBA16 PNG compresses to well under this).
 pub const MAX_MASK_BYTES: u64 = 256 << 20;
-
-/// The resolution the sky is shaded at, before upsampling to the target size.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub enum SkyResolution {
-    /// Every pixel shaded.
-    #[default]
-    Full,
-    /// W/2 × H/2 (rounded up), upsampled ×2.
-    Half,
-    /// W/4 × H/4 (rounded up), upsampled ×4.
-    Quarter,
-}
-
-impl SkyResolution {
-    /// Every resolution, finest first.
-    pub const ALL: [SkyResolution; 3] = [SkyResolution::Full, SkyResolution::Half, SkyResolution::Quarter];
-
-    /// The divisor of each side.
-    pub fn divisor(self) -> u32 {
-        match self {
-            SkyResolution::Full => 1,
-            SkyResolution::Half => 2,
-            SkyResolution::Quarter => 4,
-        }
-    }
-
-    /// The size the sky is shaded at for a `width`×`height` target (each side rounded up, at
-    /// least 1).
-    pub fn shaded_size(self, width: u32, height: u32) -> (u32, u32) {
-        let d = self.divisor();
-        (width.div_ceil(d).max(1), height.div_ceil(d).max(1))
-    }
-
-    /// `full`, `half`, `quarter`.
-    pub fn name(self) -> &'static str {
-        match self {
-            SkyResolution::Full => "full",
-            SkyResolution::Half => "half",
-            SkyResolution::Quarter => "quarter",
-        }
-    }
-}
 
 /// How a reduced-resolution sky is upsampled to the target.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
@@ -171,12 +130,12 @@ impl Occluder {
     }
 
     /// Reads a PNG mask (any colour type and bit depth) through the bounded reader
-    /// ([`crate::safe_io::read_limited`], at most [`MAX_MASK_BYTES`]) and scales it to
+    /// ([`skycore::io::read_limited`], at most [`MAX_MASK_BYTES`]) and scales it to
     /// `width`×`height` with nearest-neighbour sampling (pixel centres). A pixel is covered when
     /// its grey level (the mean of R, G, B) is at least half of white and, with an alpha
     /// channel, its alpha is at least half.
     pub fn from_png(path: &Path, width: u32, height: u32) -> Result<Occluder, MaskError> {
-        let bytes = crate::safe_io::read_limited(path, MAX_MASK_BYTES).map_err(|e| MaskError::Read(path.into(), e))?;
+        let bytes = skycore::io::read_limited(path, MAX_MASK_BYTES).map_err(|e| MaskError::Read(path.into(), e))?;
         let decode = |e: &dyn fmt::Display| MaskError::Decode(path.into(), e.to_string());
         let mut decoder = png::Decoder::new_with_limits(
             std::io::Cursor::new(bytes),

@@ -66,15 +66,13 @@ fn u32_at(bytes: &[u8], offset: usize) -> u32 {
 
 #[test]
 fn builtins_bytes_from_a_scene() {
-    let scene = skyref::Scene {
-        sun_elevation_deg: 10.0,
-        sun_azimuth_deg: 30.0,
-        position: glam::DVec3::new(0.0, 1.0, 0.0),
-        pitch_deg: 10.0,
-        ..skyref::Scene::default()
-    };
+    let mut scene = skycore::Scene::default()
+        .with_sun(10.0, 30.0)
+        .with_position(glam::DVec3::new(0.0, 1.0, 0.0))
+        .with_view(0.0, 10.0);
+    scene.lights[2] = skycore::Light { angular_diameter_deg: 0.5, ..skycore::Light::default() };
     let b = SkyBuiltins::from_scene(&scene, 64, 32).to_bytes();
-    let basis = scene.camera_basis();
+    let basis = scene.camera.basis();
     // Column 1 (up) of the basis at 16..28, its padding lane zero.
     assert_eq!(f32_at(&b, 16 + 4), basis.y_axis.y as f32);
     assert_eq!(f32_at(&b, 16 + 8), basis.y_axis.z as f32);
@@ -82,17 +80,21 @@ fn builtins_bytes_from_a_scene() {
     assert_eq!(f32_at(&b, offsets::POSITION + 4), 1.0);
     assert_eq!(f32_at(&b, offsets::SCREEN_SIZE), 64.0);
     assert_eq!(f32_at(&b, offsets::SCREEN_SIZE + 4), 32.0);
-    assert_eq!(f32_at(&b, offsets::TAN_HALF_FOV), scene.tan_half_fov() as f32);
+    assert_eq!(f32_at(&b, offsets::TAN_HALF_FOV), scene.camera.tan_half_fov() as f32);
     assert_eq!(u32_at(&b, offsets::RENDER_PASS), 0);
     assert_eq!(f32_at(&b, offsets::LUMINANCE_MULTIPLIER), 1.0);
-    let sun = scene.light0_direction();
+    let sun = scene.sun().direction();
     let l0 = offsets::LIGHTS;
     assert_eq!(f32_at(&b, l0 + offsets::LIGHT_DIRECTION + 4), sun.y as f32);
     assert_eq!(f32_at(&b, l0 + offsets::LIGHT_ENERGY), 1.0);
     assert_eq!(f32_at(&b, l0 + offsets::LIGHT_COLOR + 8), 1.0);
     assert_eq!(u32_at(&b, l0 + offsets::LIGHT_ENABLED), 1);
-    let l1 = offsets::LIGHTS + offsets::LIGHT_STRIDE;
-    assert!(b[l1..].iter().all(|&x| x == 0), "lights 1–3 are off");
+    let light = |n: usize| offsets::LIGHTS + n * offsets::LIGHT_STRIDE;
+    let off = light(1);
+    assert_eq!((u32_at(&b, off + offsets::LIGHT_ENABLED), f32_at(&b, off + offsets::LIGHT_ENERGY)), (0, 0.0));
+    assert!(b[off + offsets::LIGHT_COLOR..off + offsets::LIGHT_COLOR + 12].iter().all(|&x| x == 0), "no colour");
+    assert_eq!(u32_at(&b, light(2) + offsets::LIGHT_ENABLED), 1);
+    assert_eq!(f32_at(&b, light(2) + offsets::LIGHT_SIZE), 0.5f64.to_radians() as f32);
 }
 
 #[test]
@@ -151,16 +153,4 @@ fn shader_defaults_equal_skyrefs_hand_written_defaults() {
         material_with_defaults(shader, &lowered, &set("view_samples", "1.5")),
         Err(MaterialError::BadValue { .. })
     ));
-}
-
-#[test]
-fn cube_face_bases_agree_between_wrapper_and_reference() {
-    for face in 0..6u8 {
-        let wrapper = gdsky_naga::wrapper::cube_face_basis(usize::from(face));
-        let reference = skyref::cube_face_basis(face);
-        for (c, column) in wrapper.iter().enumerate() {
-            let r = reference.col(c);
-            assert_eq!(*column, [r.x as f32, r.y as f32, r.z as f32], "face {face} column {c}");
-        }
-    }
 }

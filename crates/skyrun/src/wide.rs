@@ -15,7 +15,8 @@
 //! through naga, which drops the decoration.
 
 use crate::render::{RenderError, SkyShader, SubPasses};
-use crate::{Gpu, Projection, SkyBuiltins};
+use crate::{Gpu, SkyBuiltins};
+use skycore::Projection;
 use std::collections::HashMap;
 use std::fmt;
 

@@ -76,12 +76,7 @@ fn freeman_in_f64_on_the_gpu_matches_skyref_f64() {
     let (front, lowered, wgsl) = common::converted_freeman();
     let params = FreemanParams::default();
     let material = freeman_material(&lowered, &params);
-    let scene = Scene {
-        sun_elevation_deg: 10.0,
-        sun_azimuth_deg: 30.0,
-        position: DVec3::new(0.0, 1.0, 0.0),
-        ..Scene::default()
-    };
+    let scene = Scene::default().with_sun(10.0, 30.0).with_position(DVec3::new(0.0, 1.0, 0.0));
     let builtins = SkyBuiltins::from_scene(&scene, WIDTH, HEIGHT);
 
     let t = Instant::now();

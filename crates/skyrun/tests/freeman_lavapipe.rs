@@ -26,13 +26,8 @@ fn freeman_on_the_gpu_matches_skyref() {
     let params = FreemanParams::default();
     let material = freeman_material(&lowered, &params);
 
-    let panorama_scene = Scene {
-        sun_elevation_deg: 10.0,
-        sun_azimuth_deg: 30.0,
-        position: glam::DVec3::new(0.0, 1.0, 0.0),
-        ..Scene::default()
-    };
-    let camera_scene = Scene { fov_deg: 90.0, pitch_deg: 10.0, ..panorama_scene };
+    let panorama_scene = Scene::default().with_sun(10.0, 30.0).with_position(glam::DVec3::new(0.0, 1.0, 0.0));
+    let camera_scene = panorama_scene.with_fov(90.0).with_view(0.0, 10.0);
 
     let mut failures = Vec::new();
     for (projection, scene) in [(Projection::Panorama, panorama_scene), (Projection::Camera, camera_scene)] {
@@ -55,7 +50,7 @@ fn freeman_on_the_gpu_matches_skyref() {
         }
     }
     // The comparison has power: the sun mirrored to azimuth −30° must fail it by far.
-    let mirrored = Scene { sun_azimuth_deg: -30.0, ..panorama_scene };
+    let mirrored = panorama_scene.with_sun(10.0, -30.0);
     let builtins = SkyBuiltins::from_scene(&mirrored, WIDTH, HEIGHT);
     let wrong = render(&gpu, &wgsl, Projection::Panorama, WIDTH, HEIGHT, &builtins, &material).expect("render");
     let reference = skyref::f32::render(&params, &panorama_scene, Projection::Panorama, WIDTH, HEIGHT);

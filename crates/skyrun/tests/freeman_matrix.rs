@@ -86,15 +86,11 @@ fn freeman_scene_matrix_matches_skyref_f32() {
     for projection in [Projection::Panorama, Projection::Camera] {
         for altitude in ALTITUDES_M {
             for sun in SUNS_DEG {
-                let scene = Scene {
-                    sun_elevation_deg: sun,
-                    sun_azimuth_deg: 30.0,
-                    position: glam::DVec3::new(0.0, altitude, 0.0),
-                    fov_deg: 90.0,
-                    yaw_deg: -30.0,
-                    pitch_deg: 5.0,
-                    ..Scene::default()
-                };
+                let scene = Scene::default()
+                    .with_sun(sun, 30.0)
+                    .with_position(glam::DVec3::new(0.0, altitude, 0.0))
+                    .with_fov(90.0)
+                    .with_view(-30.0, 5.0);
                 let (w, h) = if projection == Projection::Panorama { PANORAMA } else { CAMERA };
                 let builtins = SkyBuiltins::from_scene(&scene, w, h);
                 let rendered = shader
@@ -131,7 +127,7 @@ fn freeman_scene_matrix_matches_skyref_f32() {
                 for p in worst_pixels(&gpu_image, &f32_image, FLOOR, w as usize, 3) {
                     let i = p.y * w as usize + p.x;
                     let d = skyref::f64::eyedir(&scene, projection, p.x as u32, p.y as u32, w, h);
-                    let angle = d.normalize().dot(scene.light0_direction()).clamp(-1.0, 1.0).acos().to_degrees();
+                    let angle = d.normalize().dot(scene.sun().direction()).clamp(-1.0, 1.0).acos().to_degrees();
                     let elev = d.normalize().y.asin().to_degrees();
                     let r64 = (f64::from(f32_image[i][p.channel]) - f64_image[i][p.channel]).abs()
                         / f64_image[i][p.channel].abs().max(1e-4);
@@ -154,7 +150,7 @@ fn freeman_scene_matrix_matches_skyref_f32() {
                         break;
                     }
                     let d = skyref::f64::eyedir(&scene, projection, p.x as u32, p.y as u32, w, h).normalize();
-                    let from_sun = d.dot(scene.light0_direction()).clamp(-1.0, 1.0).acos().to_degrees();
+                    let from_sun = d.dot(scene.sun().direction()).clamp(-1.0, 1.0).acos().to_degrees();
                     let ground = d.y < 0.0 && altitude <= GROUND_CANCELLATION_ALTITUDE_M;
                     if from_sun > SUN_EDGE_DEG && !ground {
                         outside.push(format!("{p} ({from_sun:.2}° from the sun)"));
@@ -186,7 +182,7 @@ fn freeman_scene_matrix_matches_skyref_f32() {
     }
 
     // Power: a 1 % error in one parameter must fail the p99.9 bound.
-    let scene = Scene { position: glam::DVec3::new(0.0, 1.0, 0.0), ..Scene::default() };
+    let scene = Scene::default().with_position(glam::DVec3::new(0.0, 1.0, 0.0));
     let (w, h) = PANORAMA;
     let off = FreemanParams { rayleigh_scale_height: params.rayleigh_scale_height * 1.01, ..params };
     let wrong = shader

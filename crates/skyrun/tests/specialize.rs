@@ -38,7 +38,7 @@ fn baked_and_override_modules_render_as_the_generic_one() {
     let gpu = common::gpu();
     let (front, lowered, generic_wgsl) = common::converted_freeman();
     let shader = front.shader.as_ref().expect("checked");
-    let scene = Scene { sun_azimuth_deg: 30.0, position: glam::DVec3::new(0.0, 1.0, 0.0), ..Scene::default() };
+    let scene = Scene::default().with_sun(10.0, 30.0).with_position(glam::DVec3::new(0.0, 1.0, 0.0));
     let builtins = SkyBuiltins::from_scene(&scene, WIDTH, HEIGHT);
     let generic = SkyShader::new(&gpu, &generic_wgsl, SubPasses::default()).expect("compiles");
     let draw = |s: &SkyShader, material: &[u8], projection| {

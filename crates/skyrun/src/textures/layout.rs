@@ -23,7 +23,7 @@
 //! default, [`GODOT_VOLUME_GRID`]). Godot resizes a cell that does not fit; here an image whose
 //! sides are not multiples of the grid is refused.
 
-use super::{TextureData, TextureError, TextureShape, read_texture};
+use super::{TextureData, TextureError, read_texture};
 use std::path::{Path, PathBuf};
 
 /// Godot's default Texture3D import grid: 8 slices across, 8 down.
@@ -51,11 +51,12 @@ pub fn read_cube(paths: &[PathBuf], srgb: bool) -> Result<TextureData, TextureEr
                 )));
             };
             let side = w / layout.columns;
-            let faces: Vec<TextureData> = layout
+            let faces = layout
                 .cells
                 .iter()
                 .map(|&(c, r, turned)| region(&image, c * side, r * side, side, side, turned))
-                .collect();
+                .collect::<Result<Vec<_>, _>>()
+                .map_err(|e| in_file(path, e))?;
             TextureData::cube(&faces).map_err(|e| in_file(path, e))
         }
         [_, _, _, _, _, _] => {
@@ -103,10 +104,11 @@ pub fn read_volume(paths: &[PathBuf], grid: Option<(u32, u32)>, srgb: bool) -> R
                 )));
             }
             let (sw, sh) = (w / columns, h / rows);
-            let slices: Vec<TextureData> = (0..rows)
+            let slices = (0..rows)
                 .flat_map(|r| (0..columns).map(move |c| (c, r)))
                 .map(|(c, r)| region(&image, c * sw, r * sh, sw, sh, false))
-                .collect();
+                .collect::<Result<Vec<_>, _>>()
+                .map_err(|e| in_file(path, e))?;
             TextureData::volume(&slices).map_err(|e| in_file(path, e))
         }
         _ => {
@@ -183,7 +185,7 @@ const fn grid(columns: u32) -> [(u32, u32, bool); 6] {
 }
 
 /// The `w × h` texels of a 2D texture at (x, y), turned by 180° when `turned`.
-fn region(image: &TextureData, x: u32, y: u32, w: u32, h: u32, turned: bool) -> TextureData {
+fn region(image: &TextureData, x: u32, y: u32, w: u32, h: u32, turned: bool) -> Result<TextureData, TextureError> {
     let bpt = image.format().bytes_per_texel() as usize;
     let stride = image.width() as usize * bpt;
     let mut bytes = Vec::with_capacity(w as usize * h as usize * bpt);
@@ -197,15 +199,7 @@ fn region(image: &TextureData, x: u32, y: u32, w: u32, h: u32, turned: bool) -> 
             bytes.extend_from_slice(texels);
         }
     }
-    TextureData {
-        width: w,
-        height: h,
-        layers: 1,
-        shape: TextureShape::D2,
-        format: image.format(),
-        bytes,
-        mipmapped: false,
-    }
+    TextureData::new(w, h, image.format(), bytes)
 }
 
 /// Refuses layers of different sizes or formats, naming the first file and the odd one.
@@ -254,7 +248,7 @@ fn list(paths: &[PathBuf]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::TexelFormat;
+    use crate::{TexelFormat, TextureShape};
 
     /// Writes an RGBA8 PNG whose texel (x, y) is `f(x, y)`.
     pub(crate) fn png(path: &Path, w: u32, h: u32, f: impl Fn(u32, u32) -> [u8; 4]) {

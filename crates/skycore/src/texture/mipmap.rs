@@ -25,14 +25,6 @@ pub(crate) struct Level {
     pub bytes: Vec<u8>,
 }
 
-/// Whether the uniform's hints ask for mipmaps: a `filter_*_mipmap*` hint given in the shader.
-/// Godot's default filter for a sampler without a filter hint is `linear_mipmap` too, but the
-/// texture then only has the levels its import made (a 2D image imports without mipmaps by
-/// default), so a texture gets a chain only when the shader's author asked for one.
-pub fn wants_mipmaps(binding: &gdsky_naga::reflect::TextureBinding) -> bool {
-    binding.hints.iter().any(|h| h.starts_with("filter_") && h.contains("mipmap"))
-}
-
 /// The levels below level 0, down to 1 × 1 (× 1 for a 3D texture): what wgpu's
 /// `max(1, side >> level)` sizes expect.
 pub(crate) fn levels(data: &TextureData) -> Vec<Level> {
@@ -107,7 +99,7 @@ fn average(format: TexelFormat, src: &[u8], offsets: &[usize], out: &mut Vec<u8>
 }
 
 /// IEEE binary16 → f32, exactly.
-fn f16_to_f32(h: u16) -> f32 {
+pub fn f16_to_f32(h: u16) -> f32 {
     let sign = if h & 0x8000 != 0 { -1.0 } else { 1.0 };
     let (exp, man) = ((h >> 10) & 0x1f, f32::from(h & 0x3ff));
     sign * match exp {
@@ -119,7 +111,7 @@ fn f16_to_f32(h: u16) -> f32 {
 }
 
 /// f32 → IEEE binary16, rounded to nearest (ties to even), overflowing to infinity.
-pub(super) fn f32_to_f16(v: f32) -> u16 {
+pub fn f32_to_f16(v: f32) -> u16 {
     if v.is_nan() {
         return 0x7e00;
     }

@@ -41,9 +41,8 @@
 //!
 //! # Reading: [`read_limited`]
 //!
-//! Every input (shaders and their includes, EXR images, cache files) is read with
-//! [`read_limited`] (from the front end, `gdshader`, the lowest crate, which reads shaders
-//! itself): regular files only, refused from their metadata before they are opened (a FIFO's
+//! Every input (shaders and their includes, EXR images, scene files, Godot resources, cache
+//! files) is read with [`read_limited`]: regular files only, refused from their metadata before they are opened (a FIFO's
 //! open blocks, `/dev/zero` never ends), and never more than a limit per kind of file, read
 //! through `Read::take(limit + 1)`.
 //!
@@ -56,10 +55,102 @@ use std::io::{self, Error, ErrorKind, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
-pub use gdshader::preprocess::{MAX_SOURCE_BYTES, file_kind, read_limited};
-
 /// Longest chain of symbolic links followed to find where a write lands (Linux's own limit).
 pub const MAX_SYMLINKS: usize = 40;
+
+/// What kind of file `file_type` is, with its article, for messages: `a directory`, `a FIFO`,
+/// `a character device`, `a block device`, `a socket`, `a symbolic link`, `a regular file`.
+pub fn file_kind(file_type: &std::fs::FileType) -> &'static str {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if file_type.is_fifo() {
+            return "a FIFO (named pipe)";
+        }
+        if file_type.is_char_device() {
+            return "a character device";
+        }
+        if file_type.is_block_device() {
+            return "a block device";
+        }
+        if file_type.is_socket() {
+            return "a socket";
+        }
+    }
+    if file_type.is_dir() {
+        "a directory"
+    } else if file_type.is_symlink() {
+        "a symbolic link"
+    } else if file_type.is_file() {
+        "a regular file"
+    } else {
+        "not a regular file"
+    }
+}
+
+/// Reads the regular file at `path` (symbolic links followed), refusing what is not one and what
+/// is larger than `limit` bytes. This is how gdsky reads every input: shaders, includes, images.
+///
+/// * A FIFO, a character or block device (`/dev/zero`), a socket or a directory is refused from
+///   its metadata, *before* it is opened: opening a FIFO for reading blocks until a writer comes,
+///   and a device can be endless. The error's kind is [`std::io::ErrorKind::InvalidInput`] (or
+///   [`std::io::ErrorKind::IsADirectory`]), its message says what the path is.
+/// * A file whose size is over `limit` is refused unread ([`std::io::ErrorKind::FileTooLarge`]).
+///   The read itself goes through `Read::take(limit + 1)`, so a file that grows while it is read,
+///   or one whose size the metadata does not tell (`/proc`), is refused after `limit + 1` bytes
+///   rather than read to its end.
+/// * After opening, the open file is checked again, so a path swapped for a device between the
+///   check and the open is refused too. (One swapped for a FIFO in that window would block the
+///   open; that needs a hostile process racing gdsky on a path the user gave.)
+///
+/// Other errors (missing file, permissions) are the operating system's.
+pub fn read_limited(path: &Path, limit: u64) -> std::io::Result<Vec<u8>> {
+    use std::io::{Error, ErrorKind, Read};
+    let refuse_kind = |meta: &std::fs::Metadata| -> std::io::Result<()> {
+        let file_type = meta.file_type();
+        if file_type.is_file() {
+            return Ok(());
+        }
+        let kind = if file_type.is_dir() { ErrorKind::IsADirectory } else { ErrorKind::InvalidInput };
+        Err(Error::new(
+            kind,
+            format!("it is {}, not a regular file (gdsky reads only regular files)", file_kind(&file_type)),
+        ))
+    };
+    let too_large = |size: u64| {
+        Error::new(ErrorKind::FileTooLarge, format!("it is {}, over the {} limit", byte_size(size), byte_size(limit)))
+    };
+    let meta = std::fs::metadata(path)?;
+    refuse_kind(&meta)?;
+    if meta.len() > limit {
+        return Err(too_large(meta.len()));
+    }
+    let file = std::fs::File::open(path)?;
+    let opened = file.metadata()?;
+    refuse_kind(&opened)?;
+    let mut bytes = Vec::with_capacity(usize::try_from(opened.len().min(limit)).unwrap_or(0));
+    file.take(limit.saturating_add(1)).read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > limit {
+        return Err(too_large(opened.len().max(bytes.len() as u64)));
+    }
+    Ok(bytes)
+}
+
+/// `512 bytes`, `4 MiB`, `2.5 GiB`: a size for messages.
+fn byte_size(bytes: u64) -> String {
+    const UNITS: [&str; 4] = ["KiB", "MiB", "GiB", "TiB"];
+    if bytes < 1024 {
+        return format!("{bytes} bytes");
+    }
+    let mut value = bytes as f64 / 1024.0;
+    let mut unit = 0;
+    while value >= 1024.0 && unit + 1 < UNITS.len() {
+        value /= 1024.0;
+        unit += 1;
+    }
+    let text = format!("{value:.1}");
+    format!("{} {}", text.strip_suffix(".0").unwrap_or(&text), UNITS[unit])
+}
 
 /// The directory a path's file is in (`.` for a bare name).
 fn parent_dir(path: &Path) -> &Path {
