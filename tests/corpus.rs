@@ -34,9 +34,8 @@
 //! with what is missing.
 
 use gdsky::frontend as gdshader;
-use gdsky::frontend::check::consteval::ConstValue;
-use gdsky::frontend::check::types::{Scalar, Type};
-use skyoracle::{Camera, Job, Oracle, OracleError, OracleImage, Sun, UniformValue};
+use gdsky::frontend::check::types::Type;
+use skyoracle::{Job, Oracle, OracleError, OracleImage, Parameter};
 use skyref::{Projection, Scene};
 use skyrun::{Gpu, SkyBuiltins, SkyShader, SubPasses, material_with_defaults, texture_defaults};
 use std::collections::BTreeSet;
@@ -518,15 +517,9 @@ impl SetUp {
             .with_view(self.yaw_deg, self.pitch_deg)
     }
 
-    fn job(&self, code: &str, uniforms: &[(String, UniformValue)]) -> Job {
+    fn job(&self, code: &str, uniforms: &[(String, Parameter)]) -> Job {
         let mut job = Job::new(code, PARITY_SIZE.0, PARITY_SIZE.1);
-        job.camera = Camera {
-            fov_deg: self.fov_deg,
-            yaw_deg: self.yaw_deg,
-            pitch_deg: self.pitch_deg,
-            position: [0.0, self.altitude_m, 0.0],
-        };
-        job.sun = Some(Sun { elevation_deg: self.sun.0, azimuth_deg: self.sun.1, ..Sun::default() });
+        job.scene = self.scene();
         job.uniforms = uniforms.to_vec();
         job
     }
@@ -586,39 +579,12 @@ fn errors(ours: &[[f32; 4]], godot: &OracleImage) -> Errors {
 }
 
 /// The oracle's form of a `--set` value for a uniform of type `ty` (what `gdsky oracle --set`
-/// sends: tests/corpus.rs cannot reach the binary's private helper).
-fn oracle_value(ty: &Type, text: &str) -> Result<UniformValue, String> {
+/// sends).
+fn oracle_value(ty: &Type, text: &str) -> Result<Parameter, String> {
     let value = gdsky_naga::reflect::parse_value(ty, text)?;
-    let float = |v: &ConstValue| match v.convert(Scalar::Float) {
-        Some(ConstValue::Float(f)) => Some(f as f32),
-        _ => None,
-    };
-    let int = |v: &ConstValue| match v.convert(Scalar::Int) {
-        Some(ConstValue::Int(i)) => i32::try_from(i).ok(),
-        _ => None,
-    };
-    let items = |v: &ConstValue| match v {
-        ConstValue::Composite(items) => items.clone(),
-        _ => Vec::new(),
-    };
-    let out = match ty {
-        Type::Scalar(Scalar::Float) => float(&value).map(UniformValue::Float),
-        Type::Scalar(Scalar::Int) => int(&value).map(UniformValue::Int),
-        Type::Scalar(Scalar::Bool) => match value.convert(Scalar::Bool) {
-            Some(ConstValue::Bool(b)) => Some(UniformValue::Bool(b)),
-            _ => None,
-        },
-        Type::Vector(Scalar::Float, _) => {
-            match items(&value).iter().map(float).collect::<Option<Vec<f32>>>().as_deref() {
-                Some(&[x, y]) => Some(UniformValue::Vec2([x, y])),
-                Some(&[x, y, z]) => Some(UniformValue::Vec3([x, y, z])),
-                Some(&[x, y, z, w]) => Some(UniformValue::Vec4([x, y, z, w])),
-                _ => None,
-            }
-        }
-        _ => None,
-    };
-    out.ok_or_else(|| format!("the oracle cannot set `{text}` on this uniform"))
+    gdsky_naga::reflect::uniform_value(ty, &value)
+        .map(Parameter::Value)
+        .ok_or_else(|| format!("the oracle cannot set `{text}` on this uniform"))
 }
 
 /// The shader as Godot gets it: each `#include "FILE"` line replaced by the file, as Godot's
@@ -720,7 +686,7 @@ fn parity(gpu: &Gpu, oracle: &mut Oracle, entry: &Entry) -> ParityRow {
     for (label, values) in &sets {
         let material = material_with_defaults(checked, &lowered, values)
             .unwrap_or_else(|e| panic!("{} ({label}): {e}", entry.name));
-        let uniforms: Vec<(String, UniformValue)> = values
+        let uniforms: Vec<(String, Parameter)> = values
             .iter()
             .map(|(name, text)| {
                 let uniform = checked

@@ -46,7 +46,7 @@
 //! Needs the oracle (`bash scripts/install-oracle.sh`, which `.ci/run` runs) and a Vulkan
 //! adapter; without either the test fails with what is missing.
 
-use skyoracle::{Camera, Job, Oracle, OracleError, OracleImage, Sun, UniformValue};
+use skyoracle::{Job, Oracle, OracleError, OracleImage, Parameter};
 use skyref::{FreemanParams, Projection, Scene};
 use skyrun::{
     Gpu, SkyBuiltins, SkyShader, SubPasses, TexelFormat, TextureData, material_with_defaults, texture_defaults,
@@ -241,13 +241,7 @@ impl SetUp {
 
     fn job(&self, code: &str) -> Job {
         let mut job = Job::new(code, WIDTH, HEIGHT);
-        job.camera = Camera {
-            fov_deg: self.fov_deg,
-            yaw_deg: self.yaw_deg,
-            pitch_deg: self.pitch_deg,
-            position: [0.0, self.altitude_m, 0.0],
-        };
-        job.sun = Some(Sun { elevation_deg: self.sun.0, azimuth_deg: self.sun.1, ..Sun::default() });
+        job.scene = self.scene();
         job
     }
 }
@@ -353,9 +347,8 @@ impl Texture {
             .unwrap_or_else(|e| panic!("{}: {e}", self.uniform))
     }
 
-    fn for_godot(&self) -> (String, UniformValue) {
-        let value =
-            UniformValue::TextureRgbaF32 { width: self.width, height: self.height, texels: self.texels.clone() };
+    fn for_godot(&self) -> (String, Parameter) {
+        let value = Parameter::TextureRgbaF32 { width: self.width, height: self.height, texels: self.texels.clone() };
         (self.uniform.to_string(), value)
     }
 }

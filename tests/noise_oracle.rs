@@ -17,7 +17,7 @@
 
 use gdsky::noise::{FastNoiseLite, Gradient, NoiseFormat, NoiseImage, NoiseTexture2D, NoiseTexture3D};
 use serde_json::{Map, Value, json};
-use skyoracle::{GodotNoiseImage, Job, NoiseTextureSpec, Oracle, UniformValue};
+use skyoracle::{GodotNoiseImage, Job, NoiseTextureSpec, Oracle, Parameter};
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -525,7 +525,7 @@ fn a_shader_sees_an_l8_noise_texture_as_grey() {
     let ours = t.image().expect("gdsky generates");
     let code = "shader_type sky;\nuniform sampler2D noise;\nvoid sky() {\n\tCOLOR = texelFetch(noise, ivec2(FRAGCOORD.xy), 0).rgb;\n}\n";
     let job =
-        Job { uniforms: vec![("noise".into(), UniformValue::NoiseTexture2D(spec_2d(&t)))], ..Job::new(code, 32, 16) };
+        Job { uniforms: vec![("noise".into(), Parameter::NoiseTexture2D(spec_2d(&t)))], ..Job::new(code, 32, 16) };
     let image = oracle.render(&job).expect("Godot renders with its own noise texture");
     let mut worst = 0.0f32;
     for y in 0..16 {
@@ -609,7 +609,7 @@ fn a_sky_sampling_a_noise_texture_renders_like_godot() {
     for (name, t) in cases {
         let ours = render_in_gdsky(&gpu, code, &t, w, h);
         let job =
-            Job { uniforms: vec![("noise".into(), UniformValue::NoiseTexture2D(spec_2d(&t)))], ..Job::new(code, w, h) };
+            Job { uniforms: vec![("noise".into(), Parameter::NoiseTexture2D(spec_2d(&t)))], ..Job::new(code, w, h) };
         let godot = oracle.render(&job).unwrap_or_else(|e| panic!("{name}: Godot: {e}"));
         let (over, worst) = over_filtered_bound(&ours, &godot);
         println!(

@@ -17,7 +17,7 @@
 #[path = "../examples/sunfall_noise.rs"]
 mod sunfall_noise;
 
-use skyoracle::{Camera, Job, Oracle, Sun, UniformValue};
+use skyoracle::{Job, Oracle, Parameter};
 use skyref::{Projection, Scene};
 use skyrun::{Gpu, SkyBuiltins, SkyShader, SubPasses, material_with_defaults, texture_defaults};
 use std::path::{Path, PathBuf};
@@ -264,11 +264,10 @@ fn sunfall_matches_godot_with_its_noise_texture() {
             .with_view(yaw, pitch);
         let ours = sky.render(&gpu, &scene, Projection::Camera, 0.0, &[]);
         let mut job = Job::new(&code, SIZE.0, SIZE.1);
-        job.camera = Camera { fov_deg: fov, yaw_deg: yaw, pitch_deg: pitch, position: [0.0, altitude, 0.0] };
-        job.sun = Some(Sun { elevation_deg: elevation, azimuth_deg: azimuth, ..Sun::default() });
+        job.scene = scene;
         job.uniforms.push((
             "noise_texture".to_string(),
-            UniformValue::TextureRgbaF32 { width: side, height: side, texels: texels.clone() },
+            Parameter::TextureRgbaF32 { width: side, height: side, texels: texels.clone() },
         ));
         let godot = oracle.render(&job).unwrap_or_else(|e| panic!("the oracle: {e}"));
         renders.push((ours, godot));

@@ -43,8 +43,8 @@
 //! rendered and nothing written: the time of rendering every frame, measured in the same run.
 
 use super::scene::{
-    ProjectionArg, SceneArgs, SkipArgs, bake_reason, check_override_conflicts, check_scene_uniforms,
-    load_shader_specialized, open_gpu, open_input, override_names, strip,
+    SceneArgs, SkipArgs, bake_reason, check_override_conflicts, check_scene_uniforms, load_shader_specialized,
+    open_gpu, open_input, override_names, strip,
 };
 use super::{environment, usage};
 use clap::{ArgMatches, Args};
@@ -202,8 +202,8 @@ fn animate(args: &AnimateArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
     skip.merge_file(file, matches);
     let given = |id: &str| super::scene::given(matches, id);
     let (views, width, height) = base.views().map_err(usage)?;
-    let camera = base.projection == Some(ProjectionArg::Camera);
-    let cubemap = base.projection == Some(ProjectionArg::Cubemap);
+    let camera = base.projection == Some(Projection::Camera);
+    let cubemap = matches!(base.projection, Some(Projection::CubeFace(_)));
     let incremental = cubemap && anim.radiance_mode == RadianceMode::Incremental;
     let overrides = base.overrides().map_err(usage)?;
     let occluder = skip.occluder(&views, width, height)?;

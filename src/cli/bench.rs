@@ -39,8 +39,8 @@
 //! match it bit for bit. Anything else is recomputed.
 
 use super::scene::{
-    LoadedShader, ProjectionArg, SceneArgs, bake_reason, check_override_conflicts, check_scene_uniforms, open_gpu,
-    open_input, override_names, set_freeman, strip,
+    LoadedShader, SceneArgs, bake_reason, check_override_conflicts, check_scene_uniforms, open_gpu, open_input,
+    override_names, set_freeman, strip,
 };
 use super::sweep::{self, ErrorStats};
 use super::{environment, usage};
@@ -1123,11 +1123,7 @@ fn reduced_points(rows: &[super::bench_skip::SkipRow]) -> Vec<(f64, f64, String)
 }
 
 fn projection_name(scene: &SceneArgs) -> &'static str {
-    match scene.projection.unwrap_or(ProjectionArg::Panorama) {
-        ProjectionArg::Panorama => "panorama",
-        ProjectionArg::Camera => "camera",
-        ProjectionArg::Cubemap => "cubemap",
-    }
+    scene.projection.unwrap_or_default().name()
 }
 
 /// Marks the configurations no other one beats in both median time and mean relative error

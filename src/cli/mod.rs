@@ -19,6 +19,17 @@ pub mod tune;
 use std::path::Path;
 use std::process::ExitCode;
 
+/// A clap parser for a value read by its name (`FromStr`), one of `names`, which `--help` lists:
+/// the flags take the vocabulary types themselves (a projection, a sky resolution, a filter)
+/// rather than mirrors of them.
+pub fn named<T>(names: &'static [&'static str]) -> impl clap::builder::TypedValueParser<Value = T>
+where
+    T: std::str::FromStr<Err = String> + Clone + Send + Sync + 'static,
+{
+    use clap::builder::TypedValueParser as _;
+    clap::builder::PossibleValuesParser::new(names).try_map(|name| name.parse::<T>())
+}
+
 /// Checks, before any work, that `path` can be written (see [`skycore::io`]: a regular file,
 /// absent in an existing directory, or a symbolic link to one; never a directory, device, FIFO or
 /// socket; the directory writable). Exit 2 with the reason: the environment is wrong.

@@ -4,11 +4,10 @@
 //! at bracketed background energies, are inverted into the shader's linear COLOR, so
 //! `gdsky compare` can hold `gdsky render` against Godot itself.
 
-use super::scene::{BUNDLED_FREEMAN, ProjectionArg, SceneArgs, check_outputs, write_outputs};
+use super::scene::{BUNDLED_FREEMAN, SceneArgs, check_outputs, write_outputs};
 use clap::Args;
-use gdsky::frontend::check::consteval::ConstValue;
-use gdsky::frontend::check::types::{Scalar, Type};
-use skyoracle::{Camera, Job, Oracle, StartError, Sun, UniformValue};
+use skycore::Projection;
+use skyoracle::{Job, Oracle, Parameter, StartError};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
@@ -52,10 +51,10 @@ fn oracle(args: &OracleArgs) -> Result<(), ExitCode> {
     if !args.scene.texture.is_empty() {
         return Err(usage("--texture: the oracle does not give Godot textures yet".into()));
     }
-    if args.scene.projection.is_some_and(|p| p != ProjectionArg::Camera) {
+    if args.scene.projection.is_some_and(|p| p != Projection::Camera) {
         return Err(usage("the oracle renders Godot's camera view only: use --projection camera".into()));
     }
-    let scene = SceneArgs { projection: Some(ProjectionArg::Camera), ..args.scene.clone() };
+    let scene = SceneArgs { projection: Some(Projection::Camera), ..args.scene.clone() };
     let (_, width, height) = scene.views().map_err(usage)?;
     // A Godot material: its values first, so a --set of the same uniform wins.
     let material = match args.file.as_deref().filter(|f| gdsky::scene::is_godot_resource(f)) {
@@ -107,25 +106,20 @@ fn oracle(args: &OracleArgs) -> Result<(), ExitCode> {
             .ok_or_else(|| usage(format!("the shader has no uniform `{name}`")))?;
         let value = gdsky_naga::reflect::parse_value(&uniform.ty, text)
             .map_err(|m| usage(format!("`--set {name}={text}`: {m}")))?;
-        let value = oracle_value(&uniform.ty, &value)
+        let value = gdsky_naga::reflect::uniform_value(&uniform.ty, &value)
+            .map(Parameter::Value)
             .ok_or_else(|| usage(format!("`--set {name}`: the oracle cannot set a `{}` uniform", uniform.type_name)))?;
         uniforms.push((name.clone(), value));
     }
     for g in material.iter().flat_map(|m| &m.generated_textures) {
-        uniforms.push((g.name.clone(), UniformValue::NoiseTexture2D(noise_spec(&g.texture))));
+        uniforms.push((g.name.clone(), Parameter::NoiseTexture2D(noise_spec(&g.texture))));
     }
     for g in material.iter().flat_map(|m| &m.generated_ramps) {
-        uniforms.push((g.name.clone(), UniformValue::RampTexture(ramp_spec(&g.texture))));
+        uniforms.push((g.name.clone(), Parameter::RampTexture(ramp_spec(&g.texture))));
     }
 
     let mut job = Job::new(code, width, height);
-    job.camera = Camera {
-        fov_deg: scene.fov,
-        yaw_deg: scene.yaw,
-        pitch_deg: scene.pitch,
-        position: [scene.position.0, scene.position.1, scene.position.2],
-    };
-    job.sun = (!scene.no_light).then(|| Sun { elevation_deg: scene.sun.0, azimuth_deg: scene.sun.1, ..Sun::default() });
+    job.scene = scene.scene().with_time(0.0);
     job.uniforms = uniforms;
 
     let root = args.oracle_root.clone().unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")));
@@ -272,52 +266,4 @@ fn noise_spec(t: &gdsky::noise::NoiseTexture2D) -> skyoracle::NoiseTextureSpec {
         noise,
         color_ramp,
     }
-}
-
-/// A checked constant as the oracle sends it, for the types Godot's `set_shader_parameter`
-/// takes from it.
-fn oracle_value(ty: &Type, value: &ConstValue) -> Option<UniformValue> {
-    let float = |v: &ConstValue| match v.convert(Scalar::Float) {
-        Some(ConstValue::Float(f)) => Some(f as f32),
-        _ => None,
-    };
-    let int = |v: &ConstValue| match v.convert(Scalar::Int) {
-        Some(ConstValue::Int(i)) => i32::try_from(i).ok(),
-        _ => None,
-    };
-    let items = |v: &ConstValue| match v {
-        ConstValue::Composite(items) => Some(items.clone()),
-        _ => None,
-    };
-    Some(match ty {
-        Type::Scalar(Scalar::Float) => UniformValue::Float(float(value)?),
-        Type::Scalar(Scalar::Int) => UniformValue::Int(int(value)?),
-        Type::Scalar(Scalar::UInt) => match value.convert(Scalar::UInt) {
-            Some(ConstValue::UInt(u)) => UniformValue::Uint(u32::try_from(u).ok()?),
-            _ => return None,
-        },
-        Type::Scalar(Scalar::Bool) => match value.convert(Scalar::Bool) {
-            Some(ConstValue::Bool(b)) => UniformValue::Bool(b),
-            _ => return None,
-        },
-        Type::Vector(Scalar::Float, n) => {
-            let v = items(value)?.iter().map(float).collect::<Option<Vec<f32>>>()?;
-            match (n, v.as_slice()) {
-                (2, &[x, y]) => UniformValue::Vec2([x, y]),
-                (3, &[x, y, z]) => UniformValue::Vec3([x, y, z]),
-                (4, &[x, y, z, w]) => UniformValue::Vec4([x, y, z, w]),
-                _ => return None,
-            }
-        }
-        Type::Vector(Scalar::Int, n) => {
-            let v = items(value)?.iter().map(int).collect::<Option<Vec<i32>>>()?;
-            match (n, v.as_slice()) {
-                (2, &[x, y]) => UniformValue::IVec2([x, y]),
-                (3, &[x, y, z]) => UniformValue::IVec3([x, y, z]),
-                (4, &[x, y, z, w]) => UniformValue::IVec4([x, y, z, w]),
-                _ => return None,
-            }
-        }
-        _ => return None,
-    })
 }

@@ -1,11 +1,12 @@
 //! What `render`, `reference` and `demo` share: the scene flags, loading a shader (or the
 //! bundled Freeman sky), and writing images.
 
-use clap::{ArgMatches, Args, ValueEnum};
+use clap::{ArgMatches, Args};
 use gdsky::frontend::diag::render_human;
-use gdsky::scene::{ProjectionKind, SceneError, SceneFile};
-use skyref::{Projection, Scene};
+use gdsky::scene::{SceneError, SceneFile};
+use skycore::{Projection, Scene, SkyResolution};
 use skyrun::Image;
+use skyrun::UpsampleFilter;
 use std::collections::HashMap;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -17,26 +18,16 @@ pub const BUNDLED_FREEMAN: &str = include_str!("../../fixtures/freeman_sky.gdsha
 /// The name diagnostics give the bundled shader.
 pub const BUNDLED_NAME: &str = "freeman_sky.gdshader (bundled)";
 
-/// How pixels map to view directions.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum ProjectionArg {
-    /// Equirectangular, the inverse of SKY_COORDS: row 0 is the zenith, u = 0 looks toward −Z.
-    Panorama,
-    /// Godot's perspective camera: vertical --fov, --yaw and --pitch (Euler YXZ), looking toward
-    /// −Z at yaw 0, pitch 0.
-    Camera,
-    /// Godot's radiance cubemap pass: six square faces (+X, −X, +Y, −Y, +Z, −Z) side by side
-    /// in a 6N×N strip; --size gives one face (N×N).
-    Cubemap,
-}
-
 /// The scene: image size, projection, sun and camera.
 #[derive(Args, Clone, Debug)]
 pub struct SceneArgs {
     /// How pixels map to view directions [default: panorama; `oracle`: camera, the only one it
-    /// has].
-    #[arg(long, value_enum)]
-    pub projection: Option<ProjectionArg>,
+    /// has]. `panorama`: equirectangular, the inverse of SKY_COORDS (row 0 is the zenith, u = 0
+    /// looks toward −Z). `camera`: Godot's perspective camera (--fov, --yaw, --pitch; Euler YXZ,
+    /// toward −Z at yaw 0, pitch 0). `cubemap`: Godot's radiance cubemap pass, six square faces
+    /// (+X, −X, +Y, −Y, +Z, −Z) side by side in a 6N×N strip; --size gives one face (N×N).
+    #[arg(long, value_parser = super::named::<Projection>(&Projection::NAMES))]
+    pub projection: Option<Projection>,
     /// Image size WxH in pixels (a cubemap: the size of one face, which must be square). Each
     /// side 1 to 8192, at most 16,777,216 pixels (4096x4096, 8192x2048): the renderer's limits.
     #[arg(long, value_name = "WxH", default_value = "256x128", value_parser = parse_size)]
@@ -126,14 +117,8 @@ impl SceneArgs {
     /// uniform wins.
     pub fn merge_file(&mut self, file: &SceneFile, matches: &ArgMatches) {
         let given = |id: &str| given(matches, id);
-        if !given("projection")
-            && let Some(p) = file.projection
-        {
-            self.projection = Some(match p {
-                ProjectionKind::Panorama => ProjectionArg::Panorama,
-                ProjectionKind::Camera => ProjectionArg::Camera,
-                ProjectionKind::Cubemap => ProjectionArg::Cubemap,
-            });
+        if !given("projection") && file.projection.is_some() {
+            self.projection = file.projection;
         }
         if !given("size") {
             self.size = file.size.unwrap_or(self.size);
@@ -188,11 +173,9 @@ impl SceneArgs {
     /// The views to render: one projection, or the six cube faces; and the size of each.
     pub fn views(&self) -> Result<(Vec<Projection>, u32, u32), String> {
         let (w, h) = self.size;
-        match self.projection.unwrap_or(ProjectionArg::Panorama) {
-            ProjectionArg::Panorama => Ok((vec![Projection::Panorama], w, h)),
-            ProjectionArg::Camera => Ok((vec![Projection::Camera], w, h)),
-            ProjectionArg::Cubemap if w == h => Ok(((0..6).map(Projection::CubeFace).collect(), w, h)),
-            ProjectionArg::Cubemap => Err(format!("a cubemap face must be square, not {w}x{h}")),
+        match self.projection.unwrap_or_default() {
+            Projection::CubeFace(_) if w != h => Err(format!("a cubemap face must be square, not {w}x{h}")),
+            projection => Ok((projection.views(), w, h)),
         }
     }
 }
@@ -220,47 +203,6 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
     Ok((w, h))
 }
 
-/// The sky's resolution (`--sky-resolution`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum)]
-pub enum SkyResolution {
-    /// Every pixel shaded.
-    #[default]
-    Full,
-    /// Shaded at W/2×H/2 (sides rounded up) and upsampled.
-    Half,
-    /// Shaded at W/4×H/4 (sides rounded up) and upsampled.
-    Quarter,
-}
-
-impl From<SkyResolution> for skyrun::SkyResolution {
-    fn from(r: SkyResolution) -> Self {
-        match r {
-            SkyResolution::Full => skyrun::SkyResolution::Full,
-            SkyResolution::Half => skyrun::SkyResolution::Half,
-            SkyResolution::Quarter => skyrun::SkyResolution::Quarter,
-        }
-    }
-}
-
-/// The filter that upsamples a reduced sky resolution (`--upsample`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum)]
-pub enum UpsampleArg {
-    /// Bilinear (2×2 texels): cheapest; blurs the sun disk's edge most.
-    #[default]
-    Bilinear,
-    /// Catmull–Rom bicubic (4×4 texels), clamped to the 2×2 neighbours' range: sharper.
-    CatmullRom,
-}
-
-impl From<UpsampleArg> for skyrun::UpsampleFilter {
-    fn from(f: UpsampleArg) -> Self {
-        match f {
-            UpsampleArg::Bilinear => skyrun::UpsampleFilter::Bilinear,
-            UpsampleArg::CatmullRom => skyrun::UpsampleFilter::CatmullRom,
-        }
-    }
-}
-
 /// What the sky may skip (issue #11): pixels behind geometry and resolution it does not need.
 #[derive(Args, Clone, Debug, Default)]
 pub struct SkipArgs {
@@ -272,11 +214,13 @@ pub struct SkipArgs {
     pub occluder: Option<PathBuf>,
     /// Shade the sky at full, half (W/2×H/2) or quarter (W/4×H/4) resolution, Godot's own
     /// sub-passes scaled with it, and upsample to --size on the GPU.
-    #[arg(long, value_enum, value_name = "full|half|quarter", default_value_t = SkyResolution::Full)]
+    #[arg(long, value_parser = super::named::<SkyResolution>(&SkyResolution::NAMES), default_value = "full")]
     pub sky_resolution: SkyResolution,
-    /// The upsampling filter of a reduced --sky-resolution.
-    #[arg(long, value_enum, value_name = "bilinear|catmull-rom", default_value_t = UpsampleArg::Bilinear)]
-    pub upsample: UpsampleArg,
+    /// The upsampling filter of a reduced --sky-resolution: bilinear (2×2 texels; cheapest,
+    /// blurs the sun disk's edge most) or catmull-rom (bicubic over 4×4 texels, clamped to the
+    /// 2×2 neighbours' range: sharper).
+    #[arg(long, value_parser = super::named::<UpsampleFilter>(&UpsampleFilter::NAMES), default_value = "bilinear")]
+    pub upsample: UpsampleFilter,
 }
 
 impl SkipArgs {
@@ -289,11 +233,7 @@ impl SkipArgs {
         if !given(matches, "sky_resolution")
             && let Some(r) = file.sky_resolution
         {
-            self.sky_resolution = match r {
-                gdsky::scene::SkyResolution::Full => SkyResolution::Full,
-                gdsky::scene::SkyResolution::Half => SkyResolution::Half,
-                gdsky::scene::SkyResolution::Quarter => SkyResolution::Quarter,
-            };
+            self.sky_resolution = r;
         }
     }
 

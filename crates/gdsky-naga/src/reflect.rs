@@ -13,6 +13,7 @@ use gdshader::check::types::{Scalar, Type};
 use naga::Handle;
 use serde_json::{Value, json};
 use skycore::Projection;
+use skycore::UniformValue;
 use std::collections::{BTreeSet, HashMap, HashSet};
 
 /// A value in `--set` syntax, as [`parse_value`] reads it back (`1.5`, `24`, `true`,
@@ -95,6 +96,55 @@ pub fn parse_value(ty: &Type, text: &str) -> Result<ConstValue, String> {
         }
         _ => Err("only scalar and vector uniforms can be set".into()),
     }
+}
+
+/// A checked constant as a [`UniformValue`] for a uniform of type `ty`: scalars, and float and
+/// int vectors (what a host, or Godot's `set_shader_parameter`, takes); `None` for other types or
+/// a value that does not fit.
+pub fn uniform_value(ty: &Type, value: &ConstValue) -> Option<UniformValue> {
+    let float = |v: &ConstValue| match v.convert(Scalar::Float) {
+        Some(ConstValue::Float(f)) => Some(f as f32),
+        _ => None,
+    };
+    let int = |v: &ConstValue| match v.convert(Scalar::Int) {
+        Some(ConstValue::Int(i)) => i32::try_from(i).ok(),
+        _ => None,
+    };
+    let items = |v: &ConstValue| match v {
+        ConstValue::Composite(items) => Some(items.clone()),
+        _ => None,
+    };
+    Some(match ty {
+        Type::Scalar(Scalar::Float) => UniformValue::Float(float(value)?),
+        Type::Scalar(Scalar::Int) => UniformValue::Int(int(value)?),
+        Type::Scalar(Scalar::UInt) => match value.convert(Scalar::UInt) {
+            Some(ConstValue::UInt(u)) => UniformValue::UInt(u32::try_from(u).ok()?),
+            _ => return None,
+        },
+        Type::Scalar(Scalar::Bool) => match value.convert(Scalar::Bool) {
+            Some(ConstValue::Bool(b)) => UniformValue::Bool(b),
+            _ => return None,
+        },
+        Type::Vector(Scalar::Float, n) => {
+            let v = items(value)?.iter().map(float).collect::<Option<Vec<f32>>>()?;
+            match (n, v.as_slice()) {
+                (2, &[x, y]) => UniformValue::Vec2([x, y]),
+                (3, &[x, y, z]) => UniformValue::Vec3([x, y, z]),
+                (4, &[x, y, z, w]) => UniformValue::Vec4([x, y, z, w]),
+                _ => return None,
+            }
+        }
+        Type::Vector(Scalar::Int, n) => {
+            let v = items(value)?.iter().map(int).collect::<Option<Vec<i32>>>()?;
+            match (n, v.as_slice()) {
+                (2, &[x, y]) => UniformValue::IVec2([x, y]),
+                (3, &[x, y, z]) => UniformValue::IVec3([x, y, z]),
+                (4, &[x, y, z, w]) => UniformValue::IVec4([x, y, z, w]),
+                _ => return None,
+            }
+        }
+        _ => return None,
+    })
 }
 
 /// An optionally signed run of decimal digits: an integer too large for its type, rather than

@@ -296,6 +296,9 @@ pub enum SkyResolution {
 }
 
 impl SkyResolution {
+    /// Every resolution's name, as [`SkyResolution::name`] gives it.
+    pub const NAMES: [&'static str; 3] = ["full", "half", "quarter"];
+
     /// Every resolution, full first.
     pub const ALL: [SkyResolution; 3] = [SkyResolution::Full, SkyResolution::Half, SkyResolution::Quarter];
 

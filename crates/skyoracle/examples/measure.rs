@@ -9,8 +9,9 @@
 use std::path::Path;
 use std::time::Duration;
 
+use skycore::{Scene, UniformValue};
 use skyoracle::recover::{l2s, s2l};
-use skyoracle::{Brackets, Camera, Job, Oracle, Sun, Transfer, UniformValue};
+use skyoracle::{Brackets, Job, Oracle, Parameter, Transfer};
 
 fn percentile(values: &mut [f64], p: f64) -> f64 {
     values.sort_by(f64::total_cmp);
@@ -56,7 +57,7 @@ fn main() {
         [("octave (27 frames)", Brackets::default()), ("quarter-stop (105 frames)", Brackets::octaves(-12, 14, 4))]
     {
         let job = Job {
-            uniforms: vec![("K".into(), UniformValue::FloatArray(ks.clone()))],
+            uniforms: vec![("K".into(), Parameter::Value(UniformValue::FloatArray(ks.clone())))],
             brackets,
             ..Job::new(code.clone(), n, 2)
         };
@@ -92,8 +93,7 @@ fn main() {
 
     let freeman = std::fs::read_to_string(root.join("fixtures/freeman_sky.gdshader")).unwrap_or_else(|e| panic!("{e}"));
     let scene = |w, h, brackets| Job {
-        sun: Some(Sun::default()),
-        camera: Camera { position: [0.0, 1.0, 0.0], ..Camera::default() },
+        scene: Scene::default().with_position(glam::DVec3::new(0.0, 1.0, 0.0)),
         brackets,
         ..Job::new(freeman.clone(), w, h)
     };

@@ -118,7 +118,7 @@
 //! * A new shader, size, camera, uniform or energy shows in the very next frame (checked with no
 //!   settling frame; the recovery's consistency check would catch a stale one).
 //! * `source_color` uniforms are not converted: a `vec3`/`vec4` set as a Vector3, a Vector4 or a
-//!   Color arrives as given (so [`UniformValue::Color`] and [`UniformValue::Vec3`] agree).
+//!   Color arrives as given (so [`Parameter::Color`] and a `vec3` [`Parameter::Value`] agree).
 //!
 //! Not as expected:
 //! * A negative COLOR is not stored as 0: S2L's cubic is positive for −2.22 < y < −0.0185, so
@@ -135,7 +135,7 @@
 //!
 //! ## Textures
 //!
-//! [`UniformValue::TextureRgbaF32`] gives a `sampler2D` uniform a 2D texture of RGBA 32-bit
+//! [`Parameter::TextureRgbaF32`] gives a `sampler2D` uniform a 2D texture of RGBA 32-bit
 //! floats: the job carries it as base64 of the little-endian bytes (for 256×64 texels, 349 528
 //! bytes, against 653 580 as JSON numbers, and exact), and `main.gd` builds
 //! `ImageTexture.create_from_image(Image.create_from_data(w, h, false, FORMAT_RGBAF, bytes))`.
@@ -170,7 +170,7 @@
 //! 1, 3, 3, 4 of a depth-6 texture). [`Oracle::defaults`] reads the properties of a new
 //! instance of any class, to check defaults against Godot's own.
 //!
-//! [`UniformValue::NoiseTexture2D`] binds such a texture to a `sampler2D` in a render job;
+//! [`Parameter::NoiseTexture2D`] binds such a texture to a `sampler2D` in a render job;
 //! `main.gd` builds it and waits for its generation before drawing. Measured
 //! (`tests/noise_oracle.rs` in the root crate): a sky shader reading it with `texelFetch` sees
 //! (v, v, v) for an L8 code v, and gdsky's `gdsky::noise` generates the same bytes as Godot in
@@ -179,7 +179,7 @@
 //! [`Oracle::ramp_image`] does the same for a `GradientTexture1D`, `GradientTexture2D` or
 //! `CurveTexture` ([`RampTextureSpec`], with its `Gradient` or `Curve`), returning the image in
 //! Godot's format (RGBA8, RGBAF with `use_hdr`, RGBF or RF for a curve), and
-//! [`UniformValue::RampTexture`] binds one to a `sampler2D` in a render job.
+//! [`Parameter::RampTexture`] binds one to a `sampler2D` in a render job.
 //!
 //! ## Compile checks
 //!
@@ -211,15 +211,13 @@
 //! ## Example
 //!
 //! ```no_run
-//! use skyoracle::{Camera, Job, Oracle, Sun};
+//! use skycore::Scene;
+//! use skyoracle::{Job, Oracle};
 //!
 //! let mut oracle = Oracle::start(".".as_ref())?; // the repository root
 //! let code = std::fs::read_to_string("fixtures/freeman_sky.gdshader")?;
-//! let job = Job {
-//!     sun: Some(Sun { elevation_deg: 10.0, azimuth_deg: 30.0, ..Sun::default() }),
-//!     camera: Camera { position: [0.0, 1.0, 0.0], ..Camera::default() },
-//!     ..Job::new(code, 64, 32)
-//! };
+//! let scene = Scene::default().with_sun(10.0, 30.0).with_position(glam::DVec3::new(0.0, 1.0, 0.0));
+//! let job = Job { scene, ..Job::new(code, 64, 32) };
 //! let image = oracle.render(&job)?;
 //! println!("centre {:?}, {} unclipped brackets", image.pixel(32, 16), image.valid_min(32, 16));
 //! let outcome = oracle.compile("shader_type sky;\nvoid sky() { COLOR = 1.0; }\n")?;
@@ -247,7 +245,7 @@ use serde_json::{Value, json};
 
 pub use compile::{CompileOutcome, ShaderError};
 pub use install::{INSTALL_COMMAND, Installation, Missing, MissingPart};
-pub use job::{Brackets, Camera, Job, MAX_SIDE, MAX_TEXTURE_SIDE, MIN_SIDE, Sun, UniformValue};
+pub use job::{Brackets, Job, MAX_SIDE, MAX_TEXTURE_SIDE, MIN_SIDE, Parameter};
 pub use noise::{GodotNoiseImage, NoiseTextureSpec};
 pub use pck::write_pck;
 pub use ramp::{GodotRampImage, RampTextureSpec};

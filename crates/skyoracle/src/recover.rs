@@ -235,9 +235,9 @@ impl Calibrator {
 
     /// The windows of the next pass, as the uniforms of [`Self::shader`]. The bit patterns of
     /// non-negative finite f32 values are below 2³¹, so they fit Godot's int arrays.
-    pub fn uniforms(&self) -> Vec<(String, UniformValue)> {
+    pub fn uniforms(&self) -> Vec<(String, Parameter)> {
         let list = |f: &dyn Fn(u32, u32) -> u32| {
-            UniformValue::IntArray(self.windows.iter().map(|&(lo, hi)| f(lo, hi) as i32).collect())
+            Parameter::Value(UniformValue::IntArray(self.windows.iter().map(|&(lo, hi)| f(lo, hi) as i32).collect()))
         };
         vec![
             ("LO".to_string(), list(&|lo, _| lo)),
@@ -298,7 +298,8 @@ impl Calibrator {
     }
 }
 
-use crate::UniformValue;
+use crate::Parameter;
+use skycore::UniformValue;
 
 #[cfg(test)]
 mod tests {

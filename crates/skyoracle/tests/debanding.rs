@@ -8,8 +8,9 @@
 
 use std::path::Path;
 
+use skycore::UniformValue;
 use skyoracle::recover::{self, Transfer, l2s, s2l};
-use skyoracle::{Brackets, Job, Oracle, RawRender, UniformValue};
+use skyoracle::{Brackets, Job, Oracle, Parameter, RawRender};
 
 const PROBE: &str = "shader_type sky;\nrender_mode use_debanding;\nuniform float g;\nvoid sky() { COLOR = vec3(g); }\n";
 const W: u32 = 64;
@@ -54,7 +55,11 @@ fn derived_frames(transfer: &Transfer, g: f32, energies: &[f32]) -> Vec<Vec<u8>>
 }
 
 fn probe(oracle: &mut Oracle, g: f32, brackets: Brackets) -> RawRender {
-    let job = Job { uniforms: vec![("g".into(), UniformValue::Float(g))], brackets, ..Job::new(PROBE, W, H) };
+    let job = Job {
+        uniforms: vec![("g".into(), Parameter::Value(UniformValue::Float(g)))],
+        brackets,
+        ..Job::new(PROBE, W, H)
+    };
     oracle.render_raw(&job).unwrap_or_else(|e| panic!("g = {g}: {e}"))
 }
 

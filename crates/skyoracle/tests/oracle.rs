@@ -6,7 +6,9 @@
 use std::path::Path;
 use std::sync::{Mutex, MutexGuard, OnceLock};
 
-use skyoracle::{Brackets, Camera, Job, Oracle, OracleError, Sun, UniformValue};
+use glam::DVec3;
+use skycore::{Camera, Light, Scene, UniformValue};
+use skyoracle::{Brackets, Job, Oracle, OracleError, Parameter};
 
 fn oracle() -> MutexGuard<'static, Oracle> {
     static ORACLE: OnceLock<Result<Mutex<Oracle>, String>> = OnceLock::new();
@@ -57,7 +59,10 @@ fn constant_colours_recover_within_measured_bound() {
         "shader_type sky;\nuniform float K[{n}];\nvoid sky() {{\n\tCOLOR = vec3(K[clamp(int(FRAGCOORD.x), 0, {})]);\n}}\n",
         n - 1
     );
-    let job = Job { uniforms: vec![("K".into(), UniformValue::FloatArray(ks.clone()))], ..Job::new(code, n, 2) };
+    let job = Job {
+        uniforms: vec![("K".into(), Parameter::Value(UniformValue::FloatArray(ks.clone())))],
+        ..Job::new(code, n, 2)
+    };
     let image = oracle.render(&job).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(image.inconsistent, 0);
     let mut worst = 0f64;
@@ -118,7 +123,8 @@ fn compile_error_is_reported_with_its_line() {
     assert!(oracle.is_alive());
 
     // A uniform the shader does not declare is refused, not silently ignored.
-    let job = Job { uniforms: vec![("nope".into(), UniformValue::Float(1.0))], ..Job::new(GOOD, 4, 2) };
+    let job =
+        Job { uniforms: vec![("nope".into(), Parameter::Value(UniformValue::Float(1.0)))], ..Job::new(GOOD, 4, 2) };
     match oracle.render(&job) {
         Err(OracleError::Godot(message)) => assert!(message.contains("nope"), "{message}"),
         other => panic!("expected a refusal, got {other:?}"),
@@ -133,8 +139,8 @@ fn compile_error_is_reported_with_its_line() {
 fn eyedir_follows_the_camera_convention() {
     let mut oracle = oracle();
     let (w, h) = (48, 24);
-    let camera = Camera { fov_deg: 70.0, yaw_deg: 30.0, pitch_deg: 20.0, position: [0.0, 5.0, 0.0] };
-    let job = Job { camera, ..Job::new("", w, h) };
+    let camera = Camera { fov_deg: 70.0, yaw_deg: 30.0, pitch_deg: 20.0, position: DVec3::new(0.0, 5.0, 0.0) };
+    let job = Job { scene: Scene { camera, ..Scene::default().with_sun_enabled(false) }, ..Job::new("", w, h) };
     let dirs = signed(&mut oracle, &job, "EYEDIR");
     for y in 0..h {
         for x in 0..w {
@@ -156,12 +162,16 @@ fn eyedir_follows_the_camera_convention() {
         \td = vec3(d.x * yaw.y + d.z * yaw.x, d.y, -d.x * yaw.x + d.z * yaw.y);\n\
         \tCOLOR = abs(normalize(d) - EYEDIR) * 1000.0;\n\
         }\n";
-    let sin_cos = |deg: f64| UniformValue::Vec2([deg.to_radians().sin() as f32, deg.to_radians().cos() as f32]);
+    let sin_cos =
+        |deg: f64| Parameter::Value(UniformValue::Vec2([deg.to_radians().sin() as f32, deg.to_radians().cos() as f32]));
     let uniforms = vec![
         ("yaw".into(), sin_cos(camera.yaw_deg)),
         ("pitch".into(), sin_cos(camera.pitch_deg)),
-        ("tan_half_fov".into(), UniformValue::Float((camera.fov_deg / 2.0).to_radians().tan() as f32)),
-        ("size".into(), UniformValue::Vec2([w as f32, h as f32])),
+        (
+            "tan_half_fov".into(),
+            Parameter::Value(UniformValue::Float((camera.fov_deg / 2.0).to_radians().tan() as f32)),
+        ),
+        ("size".into(), Parameter::Value(UniformValue::Vec2([w as f32, h as f32]))),
     ];
     let image = oracle.render(&Job { code: code.into(), uniforms, ..job }).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(image.inconsistent, 0);
@@ -177,8 +187,7 @@ fn eyedir_follows_the_camera_convention() {
 fn light0_follows_the_sun_convention() {
     let mut oracle = oracle();
     for (e, a) in [(30.0f64, 60.0f64), (-20.0, 200.0), (80.0, -45.0)] {
-        let sun = Sun { elevation_deg: e, azimuth_deg: a, ..Sun::default() };
-        let job = Job { sun: Some(sun), ..Job::new("", 2, 2) };
+        let job = Job { scene: Scene::default().with_sun(e, a), ..Job::new("", 2, 2) };
         let got = signed(&mut oracle, &job, "LIGHT0_DIRECTION")[0];
         let (se, ce) = e.to_radians().sin_cos();
         let (sa, ca) = a.to_radians().sin_cos();
@@ -189,19 +198,20 @@ fn light0_follows_the_sun_convention() {
         // The same, compared inside the shader against the CPU's vector.
         let code =
             "shader_type sky;\nuniform vec3 want;\nvoid sky() {\n\tCOLOR = abs(LIGHT0_DIRECTION - want) * 1000.0;\n}\n";
-        let uniforms = vec![("want".into(), UniformValue::Vec3(want.map(|c| c as f32)))];
+        let uniforms = vec![("want".into(), Parameter::Value(UniformValue::Vec3(want.map(|c| c as f32))))];
         let image = oracle.render(&Job { code: code.into(), uniforms, ..job }).unwrap_or_else(|e| panic!("{e}"));
         let worst = image.pixel(0, 0)[..3].iter().fold(0f32, |m, c| m.max(*c)) / 1000.0;
         assert!(worst < 1e-6, "sun ({e}, {a}): LIGHT0_DIRECTION is off by {worst}");
     }
 
-    let sun = Sun { color: [0.5, 0.25, 1.0], energy: 3.0, angular_diameter_deg: 30.0, ..Sun::default() };
+    let mut scene = Scene::default();
+    *scene.sun_mut() = Light { color: [0.5, 0.25, 1.0], energy: 3.0, angular_diameter_deg: 30.0, ..Light::default() };
     let code = "shader_type sky;\nvoid sky() {\n\
         \tif (FRAGCOORD.x < 1.0) { COLOR = LIGHT0_COLOR; }\n\
         \telse if (FRAGCOORD.x < 2.0) { COLOR = vec3(LIGHT0_ENERGY, LIGHT0_ENABLED ? 1.0 : 0.5, 0.0); }\n\
         \telse { COLOR = vec3(abs(LIGHT0_SIZE - radians(30.0)), abs(LIGHT0_SIZE - tan(radians(30.0))), 0.0); }\n\
         }\n";
-    let image = oracle.render(&Job { sun: Some(sun), ..Job::new(code, 3, 2) }).unwrap_or_else(|e| panic!("{e}"));
+    let image = oracle.render(&Job { scene, ..Job::new(code, 3, 2) }).unwrap_or_else(|e| panic!("{e}"));
     let close = |got: f32, want: f32| (got - want).abs() <= 0.005 * want;
     let color = image.pixel(0, 0);
     assert!(close(color[0], 0.5) && close(color[1], 0.25) && close(color[2], 1.0), "LIGHT0_COLOR {color:?}");
@@ -211,7 +221,7 @@ fn light0_follows_the_sun_convention() {
     assert!(size[0] < 1e-5 && close(size[1], (30f32.to_radians().tan() - 30f32.to_radians()).abs()), "{size:?}");
 
     let job = Job {
-        sun: None,
+        scene: Scene::default().with_sun_enabled(false),
         ..Job::new("shader_type sky;\nvoid sky() {\n\tCOLOR = vec3(LIGHT0_ENABLED ? 1.0 : 0.5);\n}\n", 2, 2)
     };
     let image = oracle.render(&job).unwrap_or_else(|e| panic!("{e}"));
@@ -225,7 +235,7 @@ fn light0_follows_the_sun_convention() {
 fn sky_coords_are_approximate() {
     let mut oracle = oracle();
     let (w, h) = (32u32, 16u32);
-    let camera = Camera { fov_deg: 100.0, yaw_deg: 130.0, pitch_deg: 60.0, position: [0.0; 3] };
+    let camera = Camera { fov_deg: 100.0, yaw_deg: 130.0, pitch_deg: 60.0, position: DVec3::ZERO };
     let (mut us, mut vs) = (Vec::new(), Vec::new());
     for y in 0..h {
         for x in 0..w {
@@ -241,8 +251,9 @@ fn sky_coords_are_approximate() {
              \tCOLOR = vec3(max(d, 0.0), max(-d, 0.0), 0.0) * 100.0;\n}}\n",
             n = w * h
         );
-        let uniforms = vec![("EXACT".into(), UniformValue::FloatArray(exact))];
-        let image = oracle.render(&Job { camera, uniforms, ..Job::new(code, w, h) }).unwrap_or_else(|e| panic!("{e}"));
+        let uniforms = vec![("EXACT".into(), Parameter::Value(UniformValue::FloatArray(exact)))];
+        let scene = Scene { camera, ..Scene::default().with_sun_enabled(false) };
+        let image = oracle.render(&Job { scene, uniforms, ..Job::new(code, w, h) }).unwrap_or_else(|e| panic!("{e}"));
         let worst = image.pixels.iter().map(|p| (p[0] - p[1]).abs() / 100.0).fold(0f32, f32::max);
         println!("SKY_COORDS.{component}: up to {worst:e} from exact trigonometry");
         assert!(worst > least && worst < most, "SKY_COORDS.{component} is off by up to {worst}");
@@ -257,8 +268,7 @@ fn freeman_sky_renders_without_nan() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/freeman_sky.gdshader");
     let code = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let job = Job {
-        sun: Some(Sun::default()),
-        camera: Camera { position: [0.0, 1.0, 0.0], ..Camera::default() },
+        scene: Scene::default().with_position(DVec3::new(0.0, 1.0, 0.0)),
         brackets: Brackets::default(),
         ..Job::new(code, 64, 32)
     };
@@ -273,7 +283,8 @@ fn freeman_sky_renders_without_nan() {
     }
     println!("Freeman 64×32: {:?}, centre {:?}", image.timing.wall, image.pixel(32, 16));
 
-    let brighter = Job { uniforms: vec![("sun_intensity".into(), UniformValue::Float(2.0 * 62.832))], ..job };
+    let brighter =
+        Job { uniforms: vec![("sun_intensity".into(), Parameter::Value(UniformValue::Float(2.0 * 62.832)))], ..job };
     let twice = oracle.render(&brighter).unwrap_or_else(|e| panic!("{e}"));
     for y in 0..12 {
         for x in 0..64 {
@@ -300,7 +311,7 @@ const TEXELS: [[f32; 4]; 4] = [
 #[test]
 fn texel_fetch_returns_the_given_texels_exactly() {
     let mut oracle = oracle();
-    let texture = || UniformValue::TextureRgbaF32 { width: 4, height: 1, texels: TEXELS.to_vec() };
+    let texture = || Parameter::TextureRgbaF32 { width: 4, height: 1, texels: TEXELS.to_vec() };
 
     // Recovered: the shader of issue #12, 4 columns per texel, with FRAGCOORD.x / 4 for its
     // SCREEN_UV.x · 4: SCREEN_UV is in pixels here (screen_uv_is_fragcoord_in_pixels).
@@ -341,7 +352,7 @@ fn texel_fetch_returns_the_given_texels_exactly() {
         \tCOLOR = vec3(same, diff * 1e6, 1.0);\n}\n";
     let bits: Vec<i32> = TEXELS.iter().flatten().map(|v| v.to_bits() as i32).collect();
     let job = |bits: Vec<i32>| Job {
-        uniforms: vec![("t".into(), texture()), ("BITS".into(), UniformValue::IntArray(bits))],
+        uniforms: vec![("t".into(), texture()), ("BITS".into(), Parameter::Value(UniformValue::IntArray(bits)))],
         ..Job::new(code, 16, 2)
     };
     // Power: one channel (texel 1's G, π) expected one ulp off is seen as one mismatch.
@@ -387,7 +398,7 @@ fn table_sized_texture_arrives_in_place() {
     let with = |texture_width: u32, texels: Vec<[f32; 4]>| Job {
         uniforms: vec![(
             "t".into(),
-            UniformValue::TextureRgbaF32 { width: texture_width, height: texels.len() as u32 / texture_width, texels },
+            Parameter::TextureRgbaF32 { width: texture_width, height: texels.len() as u32 / texture_width, texels },
         )],
         ..Job::new(code, w, h)
     };

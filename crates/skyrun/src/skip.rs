@@ -51,12 +51,27 @@ impl UpsampleFilter {
         }
     }
 
+    /// Every filter's name, as [`UpsampleFilter::name`] gives it.
+    pub const NAMES: [&'static str; 2] = ["bilinear", "catmull-rom"];
+
     /// `bilinear`, `catmull-rom`.
     pub fn name(self) -> &'static str {
         match self {
             UpsampleFilter::Bilinear => "bilinear",
             UpsampleFilter::CatmullRom => "catmull-rom",
         }
+    }
+}
+
+impl std::str::FromStr for UpsampleFilter {
+    type Err = String;
+
+    /// `bilinear` or `catmull-rom`.
+    fn from_str(name: &str) -> Result<Self, String> {
+        [UpsampleFilter::Bilinear, UpsampleFilter::CatmullRom]
+            .into_iter()
+            .find(|f| f.name() == name)
+            .ok_or_else(|| format!("`{name}` is no upsampling filter; expected one of: {}", Self::NAMES.join(", ")))
     }
 }
 
