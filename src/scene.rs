@@ -43,6 +43,7 @@
 //! sun_elevation = [[0, -5.0], [12, 60.0], [23, -5.0]]   # [frame, value] keyframes, linear
 //! ```
 
+pub use gdresource::{TextureSetting, UniformSetting};
 use gdshader::diag::{Diagnostic, FileId, SourceDb, render_human};
 use serde::Deserialize;
 use skycore::{Projection, SkyResolution};
@@ -185,17 +186,6 @@ pub struct Light {
     pub enabled: bool,
 }
 
-/// A uniform value a scene fixes: its text in `--set` syntax and where it is in the file.
-#[derive(Clone, Debug, PartialEq)]
-pub struct UniformSetting {
-    /// The uniform's name.
-    pub name: String,
-    /// The value in `--set` syntax (`16`, `0.1,0.1,0.1`, `true`).
-    pub text: String,
-    /// Byte range of the value in the scene file.
-    pub span: Span<usize>,
-}
-
 /// A uniform the scene asks to be a pipeline-overridable constant (`overrides = [...]`, as
 /// `--override NAME`), and where its name is in the file.
 #[derive(Clone, Debug, PartialEq)]
@@ -203,17 +193,6 @@ pub struct OverrideSetting {
     /// The uniform's name.
     pub name: String,
     /// Byte range of the name in the scene file.
-    pub span: Span<usize>,
-}
-
-/// A texture the scene gives a sampler uniform (`[textures]`, as `--texture NAME=PATH`).
-#[derive(Clone, Debug, PartialEq)]
-pub struct TextureSetting {
-    /// The sampler uniform's name (`name_i` for element i of a sampler array).
-    pub name: String,
-    /// The image, resolved against the scene file's folder.
-    pub path: PathBuf,
-    /// Byte range of the path in the scene file.
     pub span: Span<usize>,
 }
 
@@ -347,12 +326,12 @@ pub struct SceneFile {
     /// The `[animate]` table.
     pub animate: Option<Animation>,
     /// Textures generated for sampler uniforms (a Godot material's `NoiseTexture2D`s).
-    pub generated_textures: Vec<crate::godot::GeneratedTexture>,
+    pub generated_textures: Vec<gdresource::GeneratedTexture>,
     /// 3D textures generated for sampler uniforms (a Godot material's `NoiseTexture3D`s).
-    pub generated_volumes: Vec<crate::godot::GeneratedVolume>,
+    pub generated_volumes: Vec<gdresource::GeneratedVolume>,
     /// Gradient and curve textures generated for sampler uniforms (a Godot material's
     /// `GradientTexture1D`, `GradientTexture2D` and `CurveTexture`s).
-    pub generated_ramps: Vec<crate::godot::GeneratedRamp>,
+    pub generated_ramps: Vec<gdresource::GeneratedRamp>,
     db: SourceDb,
     file: FileId,
 }
@@ -568,22 +547,12 @@ fn uniform_text(v: &UniformValueRaw) -> String {
     }
 }
 
-/// The closest of `candidates` to `name`, when it is close enough to be a typo.
-pub fn did_you_mean<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
-    candidates
-        .into_iter()
-        .map(|c| (strsim::osa_distance(name, c), c))
-        .filter(|(d, c)| *d <= (c.len().max(name.len()) / 3).max(1))
-        .min_by_key(|(d, _)| *d)
-        .map(|(_, c)| c)
-}
-
 /// serde's "unknown field `x`, expected one of `a`, `b`" with a "did you mean" note.
 fn unknown_field_note(message: &str) -> Option<String> {
     let rest = message.strip_prefix("unknown field `")?;
     let (name, rest) = rest.split_once('`')?;
     let expected: Vec<&str> = rest.split('`').skip(1).step_by(2).collect();
-    did_you_mean(name, expected.iter().copied()).map(|m| format!("did you mean `{m}`?"))
+    gdshader::diag::did_you_mean(name, expected.iter().copied()).map(|m| format!("did you mean `{m}`?"))
 }
 
 impl SceneFile {
@@ -786,9 +755,9 @@ impl SceneFile {
     /// textures, located in the material's file; nothing else set (the flags' defaults apply).
     /// `shader` is the `.gdshader`, or the material file itself when the shader is embedded.
     pub fn from_material(
-        material: crate::godot::SkyMaterial,
+        material: gdresource::SkyMaterial,
         shader: PathBuf,
-        settings: crate::godot::MaterialSettings,
+        settings: gdresource::MaterialSettings,
     ) -> SceneFile {
         SceneFile {
             path: material.path,
@@ -832,14 +801,14 @@ impl SceneFile {
                 let Some(u) = shader.uniforms.iter().find(|u| u.name == name) else {
                     let mut d = Diagnostic::error(SCENE_VALUE, format!("the shader has no uniform `{name}`"))
                         .with_primary(self.file, span.clone(), format!("`uniforms.{name}`"));
-                    d = match did_you_mean(name, names.iter().copied()) {
+                    d = match gdshader::diag::did_you_mean(name, names.iter().copied()) {
                         Some(m) => d.with_note(format!("did you mean `{m}`?")),
                         None => d.with_note(format!("its uniforms are: {}", names.join(", "))),
                     };
                     errors.push(d);
                     return;
                 };
-                if let Err(why) = gdsky_naga::reflect::parse_value(&u.ty, text) {
+                if let Err(why) = gdshader::values::parse_value(&u.ty, text) {
                     let m = format!("`{name}` = {text}: {why}");
                     errors.push(
                         Diagnostic::error(SCENE_VALUE, m.clone())
@@ -856,7 +825,7 @@ impl SceneFile {
             let Some(u) = shader.uniforms.iter().find(|u| u.name == *name) else {
                 let mut d = Diagnostic::error(SCENE_VALUE, format!("the shader has no uniform `{name}` to override"))
                     .with_primary(self.file, o.span.clone(), format!("`overrides`: `{name}`"));
-                d = match did_you_mean(name, names.iter().copied()) {
+                d = match gdshader::diag::did_you_mean(name, names.iter().copied()) {
                     Some(m) => d.with_note(format!("did you mean `{m}`?")),
                     None => d.with_note(format!("its uniforms are: {}", names.join(", "))),
                 };
@@ -873,13 +842,13 @@ impl SceneFile {
                 errors.push(Diagnostic::error(SCENE_VALUE, m.clone()).with_primary(self.file, o.span.clone(), m));
             }
         }
-        let textures = texture_names(shader);
+        let textures = shader.texture_names();
         for t in &self.textures {
             if !textures.contains(&t.name) {
                 let name = &t.name;
                 let d = Diagnostic::error(SCENE_VALUE, format!("the shader has no sampler uniform `{name}`"))
                     .with_primary(self.file, t.span.clone(), format!("`textures.{name}`"));
-                let d = match did_you_mean(name, textures.iter().map(String::as_str)) {
+                let d = match gdshader::diag::did_you_mean(name, textures.iter().map(String::as_str)) {
                     Some(m) => d.with_note(format!("did you mean `{m}`?")),
                     None if textures.is_empty() => d.with_note("it has no sampler uniforms"),
                     None => d.with_note(format!("its sampler uniforms are: {}", textures.join(", "))),
@@ -935,25 +904,6 @@ impl SceneFile {
     }
 }
 
-/// The names a texture can be given under (`--texture NAME=PATH`, `[textures]`): each material
-/// sampler uniform's, and `name_i` for element i of a sampler array, in declaration order
-/// (the names of the reflection's `bindings.textures`).
-pub fn texture_names(shader: &gdshader::CheckedShader) -> Vec<String> {
-    use gdshader::check::types::Type;
-    shader
-        .uniforms
-        .iter()
-        .filter(|u| !u.global)
-        .flat_map(|u| match &u.ty {
-            Type::Sampler(..) => vec![u.name.clone()],
-            Type::Array(element, n) if matches!(**element, Type::Sampler(..)) => {
-                (0..*n).map(|i| format!("{}_{i}", u.name)).collect()
-            }
-            _ => Vec::new(),
-        })
-        .collect()
-}
-
 /// Whether uniform values of `ty` are integers (keyframes are rounded).
 pub fn is_integer_type(ty: &gdshader::check::types::Type) -> bool {
     use gdshader::check::types::{Scalar, Type};
@@ -970,7 +920,7 @@ pub fn bake_values(
     let mut baked = std::collections::HashMap::new();
     match scene {
         Some(scene) => baked.extend(scene.uniform_pairs()),
-        None => baked.extend(gdsky_naga::reflect::defaults_as_set(shader)),
+        None => baked.extend(gdshader::values::defaults_as_set(shader)),
     }
     baked.extend(sets.iter().cloned());
     baked
@@ -983,7 +933,7 @@ pub fn is_scene_path(path: &Path) -> bool {
 
 /// Whether `path` names a Godot resource or scene (`.tres`, `.tscn`): a material to render.
 pub fn is_godot_resource(path: &Path) -> bool {
-    crate::godot::is_godot_path(path)
+    gdresource::is_godot_path(path)
 }
 
 #[cfg(test)]

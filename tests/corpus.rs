@@ -196,7 +196,7 @@ fn run(gpu: &Gpu, entry: &Entry) -> Outcome {
     };
     outcome.reads_time = Some(checked.builtins_used.contains("TIME"));
     outcome.samplers = Some(checked.uniforms.iter().filter(|u| u.type_name.contains("sampler")).count());
-    let lowered = match gdsky_naga::lower(&front) {
+    let lowered = match gdsky_naga::lower(&front, &gdsky_naga::LowerOptions::default()) {
         Ok(lowered) => lowered,
         Err(diagnostics) => {
             outcome.failure = Some((Stage::Convert, first_error(&diagnostics)));
@@ -581,8 +581,8 @@ fn errors(ours: &[[f32; 4]], godot: &OracleImage) -> Errors {
 /// The oracle's form of a `--set` value for a uniform of type `ty` (what `gdsky oracle --set`
 /// sends).
 fn oracle_value(ty: &Type, text: &str) -> Result<Parameter, String> {
-    let value = gdsky_naga::reflect::parse_value(ty, text)?;
-    gdsky_naga::reflect::uniform_value(ty, &value)
+    let value = gdshader::values::parse_value(ty, text)?;
+    gdshader::values::uniform_value(ty, &value)
         .map(Parameter::Value)
         .ok_or_else(|| format!("the oracle cannot set `{text}` on this uniform"))
 }
@@ -658,8 +658,9 @@ fn parity(gpu: &Gpu, oracle: &mut Oracle, entry: &Entry) -> ParityRow {
     let debanding = if debands { gdsky_naga::Debanding::Godot } else { gdsky_naga::Debanding::None };
     let code = godot_code(entry);
     let shader_for = |debanding| {
-        let lowered = gdsky_naga::lower_with_options(&front, &Default::default(), &[], debanding)
-            .unwrap_or_else(|_| panic!("{}: does not lower", entry.name));
+        let lowered =
+            gdsky_naga::lower(&front, &gdsky_naga::LowerOptions { debanding: debanding, ..Default::default() })
+                .unwrap_or_else(|_| panic!("{}: does not lower", entry.name));
         let wgsl = gdsky_naga::to_wgsl(&lowered).expect("WGSL");
         let shader = SkyShader::new(gpu, &wgsl, SubPasses::of(&front))
             .unwrap_or_else(|e| panic!("{}: {e}", entry.name))

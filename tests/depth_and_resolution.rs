@@ -19,7 +19,7 @@ fn arg(p: &Path) -> &str {
 /// The z of the position `vs_main` returns in WGSL text, read back by naga's WGSL front end.
 fn vertex_z(wgsl: &str) -> f32 {
     let module = naga::front::wgsl::parse_str(wgsl).expect("the emitted WGSL parses");
-    gdsky_naga::wrapper::far_plane_depth(&module).expect("vs_main returns vec4(x, y, z_literal, 1)")
+    gdsky_naga::depth_convention(&module).expect("vs_main returns vec4(x, y, z_literal, 1)").far_plane()
 }
 
 #[test]
@@ -118,7 +118,7 @@ fn occluder_leaves_covered_pixels_at_the_clear_value() {
 
 #[test]
 fn reversed_z_shader_is_occluded_alike() {
-    // The skyrun API on a module moved to reversed Z: the renderer reads the far plane from
+    // The skyrun API on a module lowered for reversed Z: the renderer reads the far plane from
     // vs_main and tests GreaterEqual against a depth buffer cleared to 0.
     let front = gdsky::check_source(
         "constant.gdshader",
@@ -126,12 +126,12 @@ fn reversed_z_shader_is_occluded_alike() {
         None,
         &mut gdsky::frontend::FsLoader,
     );
-    let mut lowered = gdsky_naga::lower(&front).expect("lowers");
-    assert!(gdsky_naga::wrapper::set_far_plane_depth(&mut lowered.module, 0.0));
+    let reversed = gdsky_naga::LowerOptions { depth: gdsky::DepthConvention::Reversed, ..Default::default() };
+    let lowered = gdsky_naga::lower(&front, &reversed).expect("lowers");
     let wgsl = gdsky_naga::to_wgsl(&lowered).expect("wgsl");
     let gpu = skyrun::Gpu::new().expect("a Vulkan adapter (lavapipe)");
     let shader = skyrun::SkyShader::new(&gpu, &wgsl, skyrun::SubPasses::default()).expect("compiles");
-    assert_eq!(shader.far_plane(), 0.0);
+    assert_eq!(shader.depth_convention(), gdsky::DepthConvention::Reversed);
     let builtins = skyrun::SkyBuiltins::from_scene(&skyref::Scene::default(), 16, 8);
     let occluder = skyrun::Occluder::left_columns(16, 8, 0.25);
     let options = skyrun::RenderOptions { occluder: Some(&occluder), ..Default::default() };

@@ -48,7 +48,8 @@ impl Sky {
         let front = gdshader::check_file(&path).unwrap_or_else(|e| panic!("{relative}: {e}"));
         let checked =
             front.shader.as_ref().unwrap_or_else(|| panic!("{relative} does not check: {:?}", front.diagnostics));
-        let lowered = gdsky_naga::lower(&front).unwrap_or_else(|e| panic!("{relative} does not lower: {e:?}"));
+        let lowered = gdsky_naga::lower(&front, &gdsky_naga::LowerOptions::default())
+            .unwrap_or_else(|e| panic!("{relative} does not lower: {e:?}"));
         let wgsl = gdsky_naga::to_wgsl(&lowered).unwrap_or_else(|e| panic!("{relative}: WGSL: {e}"));
         let textures = gdsky_naga::reflect::texture_bindings(checked, &lowered);
         let shader = SkyShader::new(gpu, &wgsl, SubPasses::of(&front))

@@ -64,7 +64,8 @@ impl Sky {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(relative);
         let front = gdshader::check_file(&path).unwrap_or_else(|e| panic!("{relative}: {e}"));
         assert!(front.shader.is_some(), "{relative} does not check: {:?}", front.diagnostics);
-        let lowered = gdsky_naga::lower(&front).unwrap_or_else(|e| panic!("{relative} does not lower: {e:?}"));
+        let lowered = gdsky_naga::lower(&front, &gdsky_naga::LowerOptions::default())
+            .unwrap_or_else(|e| panic!("{relative} does not lower: {e:?}"));
         let wgsl = gdsky_naga::to_wgsl(&lowered).unwrap_or_else(|e| panic!("{relative}: WGSL: {e}"));
         let shader = SkyShader::new(gpu, &wgsl, SubPasses::of(&front))
             .unwrap_or_else(|e| panic!("{relative}: the converted module does not compile: {e}"));

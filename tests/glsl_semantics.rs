@@ -320,7 +320,7 @@ fn run(gpu: &skyrun::Gpu, c: &Case, dir: &Path) -> Result<[f32; 3], String> {
     let path = dir.join(format!("{}.gdshader", c.name));
     std::fs::write(&path, source(c)).map_err(|e| e.to_string())?;
     let front = gdshader::check_file(&path).map_err(|e| e.to_string())?;
-    let lowered = gdsky_naga::lower(&front).map_err(|ds| format!("{ds:#?}"))?;
+    let lowered = gdsky_naga::lower(&front, &gdsky_naga::LowerOptions::default()).map_err(|ds| format!("{ds:#?}"))?;
     let wgsl = gdsky_naga::to_wgsl(&lowered).map_err(|e| format!("WGSL: {e:?}"))?;
     std::fs::write(path.with_extension("wgsl"), &wgsl).map_err(|e| e.to_string())?;
     let reread = naga::front::wgsl::parse_str(&wgsl)

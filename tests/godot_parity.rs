@@ -154,7 +154,7 @@ fn statistically(
     different: &[(&str, &str)],
 ) -> Vec<String> {
     let checked = front.shader.as_ref().unwrap_or_else(|| panic!("{name} does not check"));
-    let lowered = gdsky_naga::lower(front).expect("lowers");
+    let lowered = gdsky_naga::lower(front, &gdsky_naga::LowerOptions::default()).expect("lowers");
     let wgsl = gdsky_naga::to_wgsl(&lowered).expect("WGSL");
     let shader = SkyShader::new(gpu, &wgsl, SubPasses::of(front))
         .unwrap_or_else(|e| panic!("{name}: the harness cannot bind it: {e}"))
@@ -387,7 +387,9 @@ fn gdsky_renders_what_godot_renders() {
             continue;
         }
         let debanding = debanding_for(checked);
-        let lowered = gdsky_naga::lower_with_options(&front, &Default::default(), &[], debanding).expect("lowers");
+        let lowered =
+            gdsky_naga::lower(&front, &gdsky_naga::LowerOptions { debanding: debanding, ..Default::default() })
+                .expect("lowers");
         let wgsl = gdsky_naga::to_wgsl(&lowered).expect("WGSL");
         let material = material_with_defaults(checked, &lowered, &[]).expect("material");
         let new_shader = || {
@@ -537,7 +539,7 @@ fn report_without_debanding(
     godot: &OracleImage,
 ) {
     let checked = front.shader.as_ref().unwrap_or_else(|| panic!("{name} does not check"));
-    let lowered = gdsky_naga::lower(front).expect("lowers");
+    let lowered = gdsky_naga::lower(front, &gdsky_naga::LowerOptions::default()).expect("lowers");
     let wgsl = gdsky_naga::to_wgsl(&lowered).expect("WGSL");
     let plain = SkyShader::new(gpu, &wgsl, SubPasses::of(front))
         .unwrap_or_else(|e| panic!("{name}: the harness cannot bind it: {e}"))

@@ -1,4 +1,4 @@
-//! gdsky's noise textures (`gdsky::noise`) against the ones real Godot 4.6 generates
+//! gdsky's noise textures (`gdresource::generated`) against the ones real Godot 4.6 generates
 //! (crates/skyoracle: `NoiseTexture2D` / `NoiseTexture3D` with a `FastNoiseLite`, built in
 //! Godot's Web export from the same properties), texel for texel, in Godot's own image format
 //! (L8, or RGBA8 with a colour ramp or as a normal map), level 0.
@@ -15,7 +15,7 @@
 //! Needs the oracle (`bash scripts/install-oracle.sh`, which `.ci/run` runs) and, for the render,
 //! a Vulkan adapter; without either the test fails with what is missing.
 
-use gdsky::noise::{FastNoiseLite, Gradient, NoiseFormat, NoiseImage, NoiseTexture2D, NoiseTexture3D};
+use gdresource::generated::{FastNoiseLite, Gradient, NoiseFormat, NoiseImage, NoiseTexture2D, NoiseTexture3D};
 use serde_json::{Map, Value, json};
 use skyoracle::{GodotNoiseImage, Job, NoiseTextureSpec, Oracle, Parameter};
 use std::fmt::Write as _;
@@ -203,7 +203,7 @@ fn configurations() -> Vec<(String, NoiseTexture2D)> {
     });
     add("warp in 3D space, amplitude 12, lacunarity 2.5", NoiseTexture2D { in_3d_space: true, ..texture(64, 64, n) });
     // Godot's FastNoiseLite 1.1.0 and the crate's 1.1.1 round the 3D OpenSimplex2 warp
-    // differently; the progressive fractal amplifies it (gdsky::noise's warp3d).
+    // differently; the progressive fractal amplifies it (gdresource::generated's warp3d).
     for (w, wname) in ["simplex", "simplex reduced", "basic grid"].iter().enumerate() {
         for (f, fname) in ["none", "progressive", "independent"].iter().enumerate() {
             let n = noise(|n| {
@@ -553,7 +553,7 @@ fn render_in_gdsky(gpu: &skyrun::Gpu, code: &str, t: &NoiseTexture2D, width: u32
     let front =
         gdsky::check_source("noise_sky.gdshader", code.as_bytes().to_vec(), None, &mut gdsky::frontend::FsLoader);
     let checked = front.shader.as_ref().expect("the test shader checks");
-    let lowered = gdsky_naga::lower(&front).expect("lowers");
+    let lowered = gdsky_naga::lower(&front, &gdsky_naga::LowerOptions::default()).expect("lowers");
     let wgsl = gdsky_naga::to_wgsl(&lowered).expect("WGSL");
     let mut shader = skyrun::SkyShader::new(gpu, &wgsl, skyrun::SubPasses::of(&front))
         .expect("binds")

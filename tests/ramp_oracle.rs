@@ -1,4 +1,4 @@
-//! gdsky's gradient and curve textures (`gdsky::noise::{GradientTexture1D, GradientTexture2D,
+//! gdsky's gradient and curve textures (`gdresource::generated::{GradientTexture1D, GradientTexture2D,
 //! CurveTexture}`) against the ones real Godot 4.6 generates (crates/skyoracle: the same
 //! resources built in Godot's Web export from the same properties, `get_image()` read back),
 //! byte for byte in Godot's own image format: RGBA8, RGBAF with `use_hdr`, RGBF or RF for a
@@ -14,7 +14,7 @@
 
 mod common;
 
-use gdsky::noise::{
+use gdresource::generated::{
     Curve, CurvePoint, CurveTexture, CurveXyzTexture, Gradient, GradientTexture1D, GradientTexture2D, RampImage,
 };
 use serde_json::{Map, Value, json};

@@ -10,7 +10,7 @@ use std::path::Path;
 fn freeman() -> (gdshader::FrontendOutput, gdsky_naga::Lowered) {
     let _ = std::env::set_current_dir(env!("CARGO_MANIFEST_DIR"));
     let front = gdshader::check_file(Path::new("fixtures/freeman_sky.gdshader")).expect("fixture reads");
-    let lowered = gdsky_naga::lower(&front).expect("the Freeman sky lowers");
+    let lowered = gdsky_naga::lower(&front, &gdsky_naga::LowerOptions::default()).expect("the Freeman sky lowers");
     (front, lowered)
 }
 
@@ -76,20 +76,24 @@ fn corrupt_text_is_refused_with_naga_s_message() {
 #[test]
 fn a_module_that_does_not_read_back_writes_nothing() {
     let (front, lowered) = freeman();
-    let checked = front.shader.as_ref().expect("checked");
+    let options = gdsky::Options::default();
     let out = common::scratch("reread", "writes_nothing");
 
     // The same module, intact, writes its four files: the directory is usable.
     let good = common::scratch("reread", "writes_four");
-    gdsky::build::write_lowered(&front, checked, &lowered, "freeman_sky", &good).expect("an intact module is written");
+    let (front_again, _) = freeman();
+    let intact = gdsky::emit(front_again, &lowered, &options).expect("an intact module emits");
+    intact.write_into(&good).expect("an intact module is written");
     assert_eq!(std::fs::read_dir(&good).expect("listable").count(), 4);
 
+    // A module that does not read back never becomes a `Converted`, so there is nothing to write.
     let broken = without_returns(lowered, "get_mie_phase");
-    match gdsky::build::write_lowered(&front, checked, &broken, "freeman_sky", &out) {
-        Err(gdsky::build::BuildError::Shader(text)) => {
+    match gdsky::emit(front, &broken, &options) {
+        Err(e) => {
+            let text = e.to_string();
             assert!(text.contains("error[E604]") && text.contains("freeman_sky.gdshader:190:"), "{text}");
         }
-        other => panic!("expected an E604 refusal, got {other:?}"),
+        Ok(_) => panic!("expected an E604 refusal"),
     }
     let left: Vec<_> = std::fs::read_dir(&out).expect("listable").map(|e| e.map(|e| e.file_name())).collect();
     assert!(left.is_empty(), "nothing may be written, found {left:?}");

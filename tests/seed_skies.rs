@@ -59,7 +59,8 @@ impl Sky {
         std::fs::write(&path, source).expect("writes the shader");
         let front = gdshader::check_file(&path).unwrap_or_else(|e| panic!("{name}: {e}"));
         let checked = front.shader.as_ref().unwrap_or_else(|| panic!("{name} does not check: {:?}", front.diagnostics));
-        let lowered = gdsky_naga::lower(&front).unwrap_or_else(|e| panic!("{name} does not lower: {e:?}"));
+        let lowered = gdsky_naga::lower(&front, &gdsky_naga::LowerOptions::default())
+            .unwrap_or_else(|e| panic!("{name} does not lower: {e:?}"));
         let wgsl = gdsky_naga::to_wgsl(&lowered).unwrap_or_else(|e| panic!("{name}: WGSL: {e}"));
         let reread = naga::front::wgsl::parse_str(&wgsl)
             .unwrap_or_else(|e| panic!("{name}: naga's WGSL front end: {}", e.emit_to_string(&wgsl)));

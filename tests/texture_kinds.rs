@@ -305,13 +305,13 @@ fn a_materials_noise_texture_3d_binds_to_its_sampler3d() {
     let o = gdsky(&["render", arg(&material), "--size", "4x1", "-o", arg(&out)]);
     assert!(o.status.success(), "{}", text(&o));
     let pixels = skyrun::read_exr(&out).expect("reads").pixels;
-    // What gdsky::noise generates for the same properties: slice k's texel (2, 2) at pixel k
+    // What gdresource::generated generates for the same properties: slice k's texel (2, 2) at pixel k
     // (the shader reads the centre, (0.5, 0.5), nearest).
-    let volume = gdsky::noise::NoiseTexture3D {
+    let volume = gdresource::generated::NoiseTexture3D {
         width: 4,
         height: 4,
         depth: 4,
-        noise: Some(gdsky::noise::FastNoiseLite { seed: 5, frequency: 0.3, ..Default::default() }),
+        noise: Some(gdresource::generated::FastNoiseLite { seed: 5, frequency: 0.3, ..Default::default() }),
         ..Default::default()
     };
     let slices = volume.image().expect("generates");
@@ -370,8 +370,9 @@ fn a_noise_texture_2d_brings_its_mipmaps_as_in_godot() {
     // 8×4 noise under the default filter (linear_mipmap), read at its coarsest level: with
     // `generate_mipmaps` (Godot's default) the 1×1 level Godot makes (NoiseImage::mipmaps);
     // without, level 0 filtered bilinearly at (0.3, 0.6).
-    let noise = gdsky::noise::FastNoiseLite { seed: 11, frequency: 0.4, ..Default::default() };
-    let texture = gdsky::noise::NoiseTexture2D { width: 8, height: 4, noise: Some(noise), ..Default::default() };
+    let noise = gdresource::generated::FastNoiseLite { seed: 11, frequency: 0.4, ..Default::default() };
+    let texture =
+        gdresource::generated::NoiseTexture2D { width: 8, height: 4, noise: Some(noise), ..Default::default() };
     let image = texture.image().expect("generates");
     let coarsest = f32::from(image.mipmaps().last().expect("levels").data[0]) / 255.0;
     let code = |x: usize, y: usize| f32::from(image.data[y * 8 + x]) / 255.0;
@@ -405,20 +406,20 @@ fn a_noise_texture_2d_brings_its_mipmaps_as_in_godot() {
 
 #[test]
 fn the_mip_levels_are_godots_for_noise_textures() {
-    // gdsky::noise::NoiseImage::mipmaps is compared byte for byte with Godot's own levels
+    // gdresource::generated::NoiseImage::mipmaps is compared byte for byte with Godot's own levels
     // (tests/noise_oracle.rs); the levels skyrun binds must be the same bytes, for L8 noise
     // (expanded to RGBA) and for a colour-ramped RGBA8 one, odd sides included.
-    let ramp = gdsky::noise::Gradient {
+    let ramp = gdresource::generated::Gradient {
         offsets: vec![0.0, 1.0],
         colors: vec![[0.1, 0.2, 0.9, 1.0], [1.0, 0.8, 0.3, 0.5]],
         ..Default::default()
     };
     for (width, height, color_ramp) in [(13, 7, None), (16, 5, Some(ramp))] {
-        let texture = gdsky::noise::NoiseTexture2D {
+        let texture = gdresource::generated::NoiseTexture2D {
             width,
             height,
             color_ramp,
-            noise: Some(gdsky::noise::FastNoiseLite { seed: 2, frequency: 0.2, ..Default::default() }),
+            noise: Some(gdresource::generated::FastNoiseLite { seed: 2, frequency: 0.2, ..Default::default() }),
             ..Default::default()
         };
         let ours: Vec<Vec<u8>> =

@@ -31,7 +31,7 @@ fn render_file(gpu: &skyrun::Gpu, path: &Path, scene: &Scene, (w, h): (u32, u32)
     let front = gdshader::check_file(path).expect("readable");
     let shader =
         front.shader.as_ref().unwrap_or_else(|| panic!("{} does not check: {:?}", path.display(), front.diagnostics));
-    let lowered = gdsky_naga::lower(&front).expect("lowers");
+    let lowered = gdsky_naga::lower(&front, &gdsky_naga::LowerOptions::default()).expect("lowers");
     let wgsl = gdsky_naga::to_wgsl(&lowered).expect("WGSL");
     let sky = skyrun::SkyShader::new(gpu, &wgsl, skyrun::SubPasses::of(&front)).expect("compiles");
     let material = skyrun::material_with_defaults(shader, &lowered, &[]).expect("material");

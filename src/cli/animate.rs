@@ -222,7 +222,8 @@ fn animate(args: &AnimateArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
     check_override_conflicts(&override_names, Some(file), |n| {
         if keyframed.iter().any(|k| k == n) { None } else { bake_reason(n, Some(file), &cli_sets, args.bake_scene) }
     })?;
-    let mut loaded = load_shader_specialized(input.shader.as_deref(), Some(file), &override_names, |shader| {
+    let lowering = gdsky_naga::LowerOptions { overrides: override_names.clone(), ..Default::default() };
+    let mut loaded = load_shader_specialized(input.shader.as_deref(), Some(file), lowering, |shader| {
         if !args.bake_scene {
             return Default::default();
         }
@@ -284,7 +285,7 @@ fn animate(args: &AnimateArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
     let render_view = |frame: &Frame, view: Projection| -> Result<Vec<[f32; 4]>, ExitCode> {
         let mut shader = shader.borrow_mut();
         let mut current = current.borrow_mut();
-        if !loaded.overrides.is_empty() && current.as_ref() != Some(&frame.constants) {
+        if !loaded.overrides().is_empty() && current.as_ref() != Some(&frame.constants) {
             rebuilds.set(rebuilds.get() + 1);
             shader.set_constants(frame.constants.clone());
             *current = Some(frame.constants.clone());
@@ -375,11 +376,11 @@ fn animate(args: &AnimateArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
     );
     let ms = |d: Duration| d.as_secs_f64() * 1e3;
     println!("time: rendering {:.1} ms, with writing {:.1} ms", ms(render_time), ms(wall));
-    if !loaded.overrides.is_empty() {
+    if !loaded.overrides().is_empty() {
         // The warm-up and the reuse pass so far; each build is a driver compile, in the time above.
         println!(
             "overrides: {} (one module; pipelines built for {} sets of values, a compile each)",
-            loaded.overrides.join(", "),
+            loaded.overrides().join(", "),
             rebuilds.get()
         );
     }

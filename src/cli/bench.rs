@@ -345,12 +345,12 @@ fn subject_names(files: &[Option<PathBuf>]) -> Vec<String> {
 /// The material block of a Freeman-compatible shader from skyref's parameters, leaving out the
 /// uniforms baked into constants and the overrides (pipeline constants, [`constants`]).
 fn material(loaded: &LoadedShader, params: &FreemanParams) -> Result<Vec<u8>, skyrun::MaterialError> {
-    if loaded.baked.is_empty() && loaded.overrides.is_empty() {
+    if loaded.baked().is_empty() && loaded.overrides().is_empty() {
         return sweep::material(loaded, params);
     }
     let values: Vec<_> = skyrun::freeman_values(params)
         .into_iter()
-        .filter(|(name, _)| !loaded.baked.contains_key(*name) && !loaded.overrides.iter().any(|o| o == name))
+        .filter(|(name, _)| !loaded.baked().contains_key(*name) && !loaded.overrides().iter().any(|o| o == name))
         .collect();
     skyrun::material_bytes(&loaded.lowered, &values)
 }
@@ -360,7 +360,7 @@ fn material(loaded: &LoadedShader, params: &FreemanParams) -> Result<Vec<u8>, sk
 fn constants(loaded: &LoadedShader, params: &FreemanParams) -> Vec<(String, f64)> {
     let values = skyrun::freeman_values(params);
     loaded
-        .overrides
+        .overrides()
         .iter()
         .enumerate()
         .filter_map(|(id, name)| {
@@ -790,7 +790,7 @@ fn bench(args: &BenchArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
 /// Whether FILE is Freeman-compatible (skyref is its truth). A shader that does not read or
 /// check counts as compatible here, so the Freeman path reports its diagnostics as before.
 fn is_freeman_compatible(file: &Path) -> Result<bool, ExitCode> {
-    Ok(match gdsky::godot::check_file(file) {
+    Ok(match gdresource::check_file(file) {
         Ok(front) => front.shader.as_ref().is_none_or(gdsky::measure::freeman::compatible),
         Err(_) => true,
     })
@@ -861,8 +861,8 @@ fn bench_any(
     let (views, width, height) = scene_args.views().map_err(usage)?;
     super::check_output_dir(&args.out_dir, true, &["bench.csv", "bench.png"])?;
     let front =
-        gdsky::godot::check_file(file).map_err(|e| environment(format!("cannot read {}: {e}", file.display())))?;
-    let loaded = super::scene::load_shader(Some(file))?;
+        gdresource::check_file(file).map_err(|e| environment(format!("cannot read {}: {e}", file.display())))?;
+    let loaded = super::scene::load_shader(Some(file), &gdsky::measure::any::measuring_options())?;
     let textures = scene_args.textures(scene_file, &loaded)?;
     let sky = any::Sky::new(front, scene_args.overrides().map_err(usage)?).map_err(usage)?.with_textures(textures);
     let mut knobs = any_knobs(&sky, &args.knobs).map_err(usage)?;

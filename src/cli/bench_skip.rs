@@ -106,7 +106,7 @@ pub fn run(cx: &Context<'_>, args: &SkippingArgs) -> Result<Vec<SkipRow>, ExitCo
     let extra: Vec<(String, LoadedShader)> = args
         .skipping_shader
         .iter()
-        .map(|p| load_shader(Some(p)).map(|l| (p.display().to_string(), l)))
+        .map(|p| load_shader(Some(p), &gdsky::measure::any::measuring_options()).map(|l| (p.display().to_string(), l)))
         .collect::<Result<_, _>>()?;
     let mut compiled = Vec::new();
     for (name, loaded) in &extra {

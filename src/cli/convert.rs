@@ -37,6 +37,12 @@ pub struct ConvertArgs {
     /// test GreaterEqual, clear 0) instead of 1. The reflection's `depth` says which.
     #[arg(long)]
     reversed_z: bool,
+    /// Write SPIR-V debug names (`OpName`: readable disassembly, about 12 % more bytes). Without
+    /// it the SPIR-V is the same bytes from every build of gdsky.
+    #[arg(long)]
+    debug_names: bool,
+    #[command(flatten)]
+    lowering: super::scene::LoweringArgs,
 }
 
 pub fn run(args: &ConvertArgs) -> ExitCode {
@@ -64,7 +70,7 @@ pub fn run(args: &ConvertArgs) -> ExitCode {
         return code;
     }
     let front = match &input.shader {
-        Some(path) => match gdsky::godot::check_file(path) {
+        Some(path) => match gdresource::check_file(path) {
             Ok(f) => f,
             Err(err) => {
                 eprintln!("error: cannot read {}: {err}", path.display());
@@ -106,42 +112,46 @@ pub fn run(args: &ConvertArgs) -> ExitCode {
     };
     // Baking "every uniform at its default" leaves the overrides alone.
     baked.retain(|name, _| !overrides.contains(name));
-    let mut lowered = match gdsky_naga::lower_with_overrides(&front, &baked, &overrides) {
+    let mut options = gdsky::Options::new()
+        .debanding(args.lowering.debanding)
+        .sky_coords(args.lowering.sky_coords)
+        .depth(if args.reversed_z { gdsky::DepthConvention::Reversed } else { gdsky::DepthConvention::Standard })
+        .spirv_debug_names(args.debug_names);
+    options.set = baked.into_iter().collect();
+    options.overrides = overrides;
+    let lowered = match gdsky_naga::lower(&front, &options.lower_options()) {
         Ok(l) => l,
         Err(diags) => {
             eprint!("{}", render_human(&front.db, &diags, color));
             return ExitCode::from(1);
         }
     };
-    if args.reversed_z {
-        gdsky_naga::wrapper::set_far_plane_depth(&mut lowered.module, gdsky_naga::wrapper::FAR_PLANE_REVERSED);
-    }
     // Both texts come back re-read and validated by naga's own front ends, or not at all;
     // overrides are specialization constants in the SPIR-V.
-    let emitted = gdsky_naga::to_wgsl(&lowered).and_then(|w| Ok((w, gdsky_naga::to_spirv(&lowered)?)));
-    let (wgsl, spirv) = match emitted {
-        Ok((w, words)) => (w, words.iter().flat_map(|w| w.to_le_bytes()).collect::<Vec<u8>>()),
-        Err(err) => {
-            eprint!("{}", render_human(&front.db, &[err.diagnostic(&front)], color));
+    let converted = match gdsky::emit(front, &lowered, &options) {
+        Ok(c) => c,
+        Err(e) => {
+            eprint!("{}", e.render(color));
             return ExitCode::from(1);
         }
     };
-    let reflection = gdsky_naga::reflect::reflection(&stem, shader, &lowered, &baked);
-    let json = match serde_json::to_string_pretty(&reflection) {
-        Ok(j) => j + "\n",
-        Err(err) => {
-            eprintln!("error: cannot write the reflection: {err}");
-            return ExitCode::from(1);
-        }
-    };
+    let json = converted.reflection_json() + "\n";
+    let wgsl = converted.wgsl.into_bytes();
+    let spirv = converted.spirv.iter().flat_map(|w| w.to_le_bytes()).collect::<Vec<u8>>();
     if let Err(code) = super::create_output_dir(&args.out_dir) {
         return code;
     }
-    for (name, bytes) in names.iter().zip([wgsl.as_bytes(), spirv.as_slice(), json.as_bytes()]) {
-        let path = args.out_dir.join(name);
-        if let Err(message) = super::write_file(&path, bytes) {
-            return super::environment(message);
-        }
+    let paths = names.map(|name| args.out_dir.join(name));
+    let files = [
+        (paths[0].as_path(), wgsl.as_slice()),
+        (paths[1].as_path(), spirv.as_slice()),
+        (paths[2].as_path(), json.as_bytes()),
+    ];
+    // Written as a set: all three new, or (on a failure) all three as they were.
+    if let Err(err) = skycore::io::write_set(&files) {
+        return super::environment(format!("cannot write into {}: {err}", args.out_dir.display()));
+    }
+    for (path, bytes) in files {
         println!("wrote {} ({} bytes)", path.display(), bytes.len());
     }
     ExitCode::SUCCESS

@@ -73,7 +73,7 @@ fn demo(out: &Path) -> Result<(), ExitCode> {
 
     progress.set_message("converting the bundled Freeman sky");
     let t = Instant::now();
-    let loaded = load_shader(None)?;
+    let loaded = load_shader(None, &gdsky_naga::LowerOptions::default())?;
     let LoadedShader { front, lowered, wgsl, .. } = &loaded;
     let spirv = gdsky_naga::to_spirv(lowered).map_err(|err| {
         eprint!("{}", gdsky::frontend::diag::render_human(&front.db, &[err.diagnostic(front)], false));
@@ -81,7 +81,7 @@ fn demo(out: &Path) -> Result<(), ExitCode> {
     })?;
     let convert_time = t.elapsed();
     let shader_info = front.shader.as_ref().ok_or(ExitCode::from(1))?;
-    let reflection = gdsky_naga::reflect::reflection("freeman_sky", shader_info, lowered, &Default::default());
+    let reflection = gdsky_naga::reflect::reflection("freeman_sky", shader_info, lowered);
     let json = serde_json::to_string_pretty(&reflection).unwrap_or_default() + "\n";
     let spirv_bytes: Vec<u8> = spirv.iter().flat_map(|w| w.to_le_bytes()).collect();
     progress.suspend(|| super::create_output_dir(out))?;

@@ -7,7 +7,6 @@ pub mod bench_skip;
 pub mod check;
 pub mod compare;
 pub mod convert;
-pub mod debanding;
 pub mod demo;
 pub mod oracle;
 pub mod render;

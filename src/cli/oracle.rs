@@ -34,6 +34,8 @@ pub struct OracleArgs {
     oracle_root: Option<PathBuf>,
     #[command(flatten)]
     scene: SceneArgs,
+    #[command(flatten)]
+    lowering: super::scene::LoweringArgs,
 }
 
 pub fn run(args: &OracleArgs) -> ExitCode {
@@ -87,7 +89,7 @@ fn oracle(args: &OracleArgs) -> Result<(), ExitCode> {
         Some(m) => m.shader.clone(),
         None => args.file.clone(),
     };
-    let loaded = super::scene::load_shader(shader_file.as_deref())?;
+    let loaded = super::scene::load_shader(shader_file.as_deref(), &args.lowering.options())?;
     // The text the front end read and checked (not a second read of FILE, which could differ).
     let code = match &shader_file {
         Some(_) => loaded.front.db.text(loaded.front.root).to_string(),
@@ -104,9 +106,9 @@ fn oracle(args: &OracleArgs) -> Result<(), ExitCode> {
             .iter()
             .find(|u| &u.name == name)
             .ok_or_else(|| usage(format!("the shader has no uniform `{name}`")))?;
-        let value = gdsky_naga::reflect::parse_value(&uniform.ty, text)
+        let value = gdshader::values::parse_value(&uniform.ty, text)
             .map_err(|m| usage(format!("`--set {name}={text}`: {m}")))?;
-        let value = gdsky_naga::reflect::uniform_value(&uniform.ty, &value)
+        let value = gdshader::values::uniform_value(&uniform.ty, &value)
             .map(Parameter::Value)
             .ok_or_else(|| usage(format!("`--set {name}`: the oracle cannot set a `{}` uniform", uniform.type_name)))?;
         uniforms.push((name.clone(), value));
@@ -172,14 +174,14 @@ fn start(root: &Path) -> Result<Oracle, ExitCode> {
 /// (Godot then generates the texture itself).
 /// A material's gradient or curve texture as the oracle's JSON property maps (Godot's names),
 /// every property given, so that Godot builds what gdsky generates.
-fn ramp_spec(t: &gdsky::noise::RampTexture) -> skyoracle::RampTextureSpec {
-    use gdsky::noise::RampTexture;
+fn ramp_spec(t: &gdresource::generated::RampTexture) -> skyoracle::RampTextureSpec {
+    use gdresource::generated::RampTexture;
     use serde_json::{Map, Value, json};
     let object = |v: Value| match v {
         Value::Object(map) => map,
         _ => Map::new(),
     };
-    let gradient = |g: &Option<gdsky::noise::Gradient>| {
+    let gradient = |g: &Option<gdresource::generated::Gradient>| {
         g.as_ref().map(|g| {
             object(json!({
                 "offsets": g.offsets, "colors": g.colors, "interpolation_mode": g.interpolation_mode,
@@ -187,7 +189,7 @@ fn ramp_spec(t: &gdsky::noise::RampTexture) -> skyoracle::RampTextureSpec {
             }))
         })
     };
-    let curve = |c: &Option<gdsky::noise::Curve>| {
+    let curve = |c: &Option<gdresource::generated::Curve>| {
         c.as_ref().map(|c| {
             let points: Vec<Value> = c
                 .points
@@ -228,7 +230,7 @@ fn ramp_spec(t: &gdsky::noise::RampTexture) -> skyoracle::RampTextureSpec {
     spec
 }
 
-fn noise_spec(t: &gdsky::noise::NoiseTexture2D) -> skyoracle::NoiseTextureSpec {
+fn noise_spec(t: &gdresource::generated::NoiseTexture2D) -> skyoracle::NoiseTextureSpec {
     use serde_json::{Map, Value, json};
     let object = |v: Value| match v {
         Value::Object(map) => map,

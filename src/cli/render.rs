@@ -49,14 +49,8 @@ pub struct RenderArgs {
     scene: SceneArgs,
     #[command(flatten)]
     skip: SkipArgs,
-    /// Godot's sky debanding: `godot` adds its noise to shaders that declare `render_mode
-    /// use_debanding` (docs/godot.md, "Debanding"); `none` leaves COLOR as the shader writes it.
-    #[arg(long, value_enum, default_value_t = super::debanding::DebandingArg::None)]
-    debanding: super::debanding::DebandingArg,
-    /// How SKY_COORDS is computed: `exact` (Godot 4.3–4.5) or `godot46`, Godot 4.6's
-    /// approximate trigonometry (what the oracle's Godot computes; docs/godot.md).
-    #[arg(long, value_enum, default_value_t = super::debanding::SkyCoordsArg::Exact)]
-    sky_coords: super::debanding::SkyCoordsArg,
+    #[command(flatten)]
+    lowering: super::scene::LoweringArgs,
 }
 
 pub fn run(args: &RenderArgs, matches: &ArgMatches) -> ExitCode {
@@ -85,7 +79,8 @@ fn render(args: &RenderArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
     check_override_conflicts(&names, input.scene.as_ref(), |n| {
         bake_reason(n, input.scene.as_ref(), &cli_sets, args.bake_scene)
     })?;
-    let mut loaded = load_shader_specialized(input.shader.as_deref(), input.scene.as_ref(), &names, |shader| {
+    let lowering = gdsky_naga::LowerOptions { overrides: names.clone(), ..args.lowering.options() };
+    let mut loaded = load_shader_specialized(input.shader.as_deref(), input.scene.as_ref(), lowering, |shader| {
         if args.bake_scene {
             gdsky::scene::bake_values(shader, input.scene.as_ref(), &cli_sets)
         } else {
@@ -93,10 +88,9 @@ fn render(args: &RenderArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
         }
     })?;
     check_scene_uniforms(input.scene.as_ref(), &loaded)?;
-    super::debanding::apply(&mut loaded, args.debanding, args.sky_coords)?;
     loaded.textures = scene_args.textures(input.scene.as_ref(), &loaded)?;
     if args.bake_scene {
-        let mut names: Vec<&String> = loaded.baked.keys().collect();
+        let mut names: Vec<&String> = loaded.baked().keys().collect();
         names.sort();
         eprintln!(
             "baked {} uniform(s): {}",

@@ -18,6 +18,27 @@ pub const BUNDLED_FREEMAN: &str = include_str!("../../fixtures/freeman_sky.gdsha
 /// The name diagnostics give the bundled shader.
 pub const BUNDLED_NAME: &str = "freeman_sky.gdshader (bundled)";
 
+/// How the shader is lowered for Godot's look: its debanding and its SKY_COORDS.
+#[derive(Args, Clone, Copy, Debug)]
+pub struct LoweringArgs {
+    /// Godot's sky debanding: `godot` (the default, as Godot 4.6) adds its dither to shaders
+    /// that declare `render_mode use_debanding` (docs/godot.md, "Debanding"); `none` leaves
+    /// COLOR as the shader writes it (for error measurement).
+    #[arg(long, value_parser = super::named::<gdsky::Debanding>(&gdsky::Debanding::NAMES), default_value = "godot")]
+    pub debanding: gdsky::Debanding,
+    /// How SKY_COORDS is computed: `godot46` (the default), Godot 4.6's approximate
+    /// trigonometry, which the oracle's Godot computes; `exact` as Godot 4.3–4.5 (docs/godot.md).
+    #[arg(long, value_parser = super::named::<gdsky::SkyCoords>(&gdsky::SkyCoords::NAMES), default_value = "godot46")]
+    pub sky_coords: gdsky::SkyCoords,
+}
+
+impl LoweringArgs {
+    /// The lowering options these flags give.
+    pub fn options(&self) -> gdsky_naga::LowerOptions {
+        gdsky_naga::LowerOptions { debanding: self.debanding, sky_coords: self.sky_coords, ..Default::default() }
+    }
+}
+
 /// The scene: image size, projection, sun and camera.
 #[derive(Args, Clone, Debug)]
 pub struct SceneArgs {
@@ -300,7 +321,7 @@ pub fn parse_pitch(s: &str) -> Result<f64, String> {
 
 /// Checks the `--set NAME=VALUE` pairs given for the Freeman sky's parameters (`reference`,
 /// `bench`) with the value parser `render` and `convert` use
-/// ([`gdsky_naga::reflect::parse_value`]: finite numbers within their type's range), then applies
+/// ([`gdshader::values::parse_value`]: finite numbers within their type's range), then applies
 /// them to `params`.
 pub fn set_freeman(params: &mut skyref::FreemanParams, overrides: &[(String, String)]) -> Result<(), String> {
     use gdsky::frontend::check::types::{Scalar, Type};
@@ -314,7 +335,7 @@ pub fn set_freeman(params: &mut skyref::FreemanParams, overrides: &[(String, Str
         let Some(ty) = ty else {
             return Err(format!("`--set {name}={text}`: the Freeman sky has no uniform `{name}`"));
         };
-        gdsky_naga::reflect::parse_value(&ty, text).map_err(|why| format!("`--set {name}={text}`: {why}"))?;
+        gdshader::values::parse_value(&ty, text).map_err(|why| format!("`--set {name}={text}`: {why}"))?;
         params.set(name, text).map_err(|why| format!("`--set {name}={text}`: {why}"))?;
     }
     Ok(())
@@ -331,11 +352,6 @@ pub struct LoadedShader {
     pub lowered: gdsky_naga::Lowered,
     /// Its WGSL.
     pub wgsl: String,
-    /// The uniforms baked into constants (`--bake-scene`), name → value.
-    pub baked: HashMap<String, String>,
-    /// The uniforms emitted as pipeline-overridable constants (`--override`), the k-th with
-    /// `@id(k)`.
-    pub overrides: Vec<String>,
     /// Textures for sampler uniforms ([`SceneArgs::textures`]), bound by
     /// [`LoadedShader::compile`].
     pub textures: Vec<(String, skyrun::TextureData)>,
@@ -350,7 +366,7 @@ impl LoadedShader {
         // not in the block.
         let kept: Vec<(String, String)> = overrides
             .iter()
-            .filter(|(n, _)| !self.baked.contains_key(n) && !self.overrides.contains(n))
+            .filter(|(n, _)| !self.baked().contains_key(n) && !self.overrides().contains(n))
             .cloned()
             .collect();
         skyrun::material_with_defaults(shader, &self.lowered, &kept)
@@ -363,14 +379,15 @@ impl LoadedShader {
         let Some(shader) = self.front.shader.as_ref() else {
             return Ok(Vec::new());
         };
-        let mut constants = Vec::with_capacity(self.overrides.len());
-        for (id, name) in self.overrides.iter().enumerate() {
+        let mut constants = Vec::with_capacity(self.overrides().len());
+        for (id, name) in self.overrides().iter().enumerate() {
             let Some(u) = shader.uniforms.iter().find(|u| u.name == *name) else {
                 return Err(format!("the shader has no uniform `{name}` to override"));
             };
             let value = match sets.iter().rev().find(|(n, _)| n == name) {
-                Some((_, text)) => gdsky_naga::reflect::parse_value(&u.ty, text)
-                    .map_err(|why| format!("`--set {name}={text}`: {why}"))?,
+                Some((_, text)) => {
+                    gdshader::values::parse_value(&u.ty, text).map_err(|why| format!("`--set {name}={text}`: {why}"))?
+                }
                 None => u.default.clone().unwrap_or(gdsky::frontend::check::consteval::ConstValue::Int(0)),
             };
             constants.push((id.to_string(), constant_value(&value)));
@@ -387,17 +404,17 @@ impl LoadedShader {
     /// number (the material check reports it first in practice).
     pub fn bake_tables(&mut self, values: &[(String, String)]) -> Result<Option<String>, String> {
         let Some(shader) = self.front.shader.as_ref() else { return Ok(None) };
-        let declared = gdsky::scene::texture_names(shader).iter().any(|n| n == TRANSMITTANCE_TABLE);
+        let declared = shader.texture_names().iter().any(|n| n == TRANSMITTANCE_TABLE);
         if !declared || self.textures.iter().any(|(n, _)| n == TRANSMITTANCE_TABLE) {
             return Ok(None);
         }
         let mut params = skyref::FreemanParams::default();
         let known: Vec<&'static str> = params.uniforms_mut().iter().map(|(n, _)| *n).collect();
-        let defaults = gdsky_naga::reflect::defaults_as_set(shader);
+        let defaults = gdshader::values::defaults_as_set(shader);
         let mut settings: Vec<(&String, &String)> = defaults.iter().collect();
         settings.sort();
         settings.extend(values.iter().map(|(n, v)| (n, v)));
-        settings.extend(self.baked.iter());
+        settings.extend(self.baked().iter());
         for (name, value) in settings {
             if known.contains(&name.as_str()) {
                 params.set(name, value)?;
@@ -449,11 +466,11 @@ impl LoadedShader {
 /// A texture a Godot material generates.
 enum Generated<'a> {
     /// A `NoiseTexture2D`.
-    Plane(&'a gdsky::noise::NoiseTexture2D),
+    Plane(&'a gdresource::generated::NoiseTexture2D),
     /// A `NoiseTexture3D`.
-    Volume(&'a gdsky::noise::NoiseTexture3D),
+    Volume(&'a gdresource::generated::NoiseTexture3D),
     /// A `GradientTexture1D`, `GradientTexture2D` or `CurveTexture`.
-    Ramp(&'a gdsky::noise::RampTexture),
+    Ramp(&'a gdresource::generated::RampTexture),
 }
 
 /// The texture shape a sampler uniform takes: a cube map for `samplerCube`, a 3D texture for
@@ -648,12 +665,12 @@ pub fn open_input(file: Option<&Path>) -> Result<Input, ExitCode> {
 
 /// Opens a Godot material (`.tres`) or scene (`.tscn`) as a scene file
 /// ([`SceneFile::from_material`]): its shader (FILE itself when the shader is embedded: the
-/// loaders check it through [`gdsky::godot::check_file`]), its values as `[uniforms]` and its
+/// loaders check it through [`gdresource::check_file`]), its values as `[uniforms]` and its
 /// textures as `[textures]`, every error located in the material's file. Warnings (values of
 /// uniforms the shader lacks) are printed.
 fn open_material(path: &Path) -> Result<Input, ExitCode> {
-    use gdsky::godot::{MaterialError, MaterialShader};
-    let material = match gdsky::godot::load_sky_material(path) {
+    use gdresource::{MaterialError, MaterialShader};
+    let material = match gdresource::load_sky_material(path) {
         Ok(m) => m,
         Err(MaterialError::Read(m)) => {
             eprintln!("{}", m.trim_end());
@@ -694,20 +711,22 @@ pub fn check_scene_uniforms(scene: Option<&SceneFile>, loaded: &LoadedShader) ->
     })
 }
 
-/// Checks and lowers `file`, or the bundled Freeman sky when there is none. Diagnostics are
-/// printed; the error is the exit code (1 invalid, 2 unreadable).
-pub fn load_shader(file: Option<&Path>) -> Result<LoadedShader, ExitCode> {
-    load_shader_baking(file, |_| HashMap::new())
+/// Checks and lowers `file`, or the bundled Freeman sky when there is none, as `lowering` says
+/// (Godot 4.6's defaults, or the measuring engine's). Diagnostics are printed; the error is the
+/// exit code (1 invalid, 2 unreadable).
+pub fn load_shader(file: Option<&Path>, lowering: &gdsky_naga::LowerOptions) -> Result<LoadedShader, ExitCode> {
+    load_shader_specialized(file, None, lowering.clone(), |_| HashMap::new())
 }
 
-/// [`load_shader_baking`] with `overrides` emitted as pipeline-overridable constants (taken out
-/// of what `bake` picks; the caller has refused a uniform baked on purpose, see
-/// [`check_override_conflicts`]). The scene file's uniforms and overrides are checked first, so
-/// a wrong name is reported located in the file.
+/// [`load_shader`] with the uniforms `bake` picks from the checked shader (name → value in
+/// `--set` syntax) baked into constants and `lowering.overrides` emitted as pipeline-overridable
+/// constants (taken out of what `bake` picks; the caller has refused a uniform baked on purpose,
+/// see [`check_override_conflicts`]). The scene file's uniforms and overrides are checked first,
+/// so a wrong name is reported located in the file. The shader is lowered once.
 pub fn load_shader_specialized(
     file: Option<&Path>,
     scene: Option<&SceneFile>,
-    overrides: &[String],
+    mut lowering: gdsky_naga::LowerOptions,
     bake: impl FnOnce(&gdsky::CheckedShader) -> HashMap<String, String>,
 ) -> Result<LoadedShader, ExitCode> {
     let front = check_front(file)?;
@@ -721,21 +740,10 @@ pub fn load_shader_specialized(
         })?;
     }
     let mut baked = bake(shader);
-    baked.retain(|name, _| !overrides.contains(name));
-    let (lowered, wgsl) = lower_and_emit(&front, &baked, overrides)?;
-    Ok(LoadedShader { front, lowered, wgsl, baked, overrides: overrides.to_vec(), textures: Vec::new() })
-}
-
-/// [`load_shader`], baking the uniforms `bake` picks from the checked shader (name → value in
-/// `--set` syntax) into constants; [`LoadedShader::baked`] lists them.
-pub fn load_shader_baking(
-    file: Option<&Path>,
-    bake: impl FnOnce(&gdsky::CheckedShader) -> HashMap<String, String>,
-) -> Result<LoadedShader, ExitCode> {
-    let front = check_front(file)?;
-    let baked = front.shader.as_ref().map(bake).unwrap_or_default();
-    let (lowered, wgsl) = lower_and_emit(&front, &baked, &[])?;
-    Ok(LoadedShader { front, lowered, wgsl, baked, overrides: Vec::new(), textures: Vec::new() })
+    baked.retain(|name, _| !lowering.overrides.contains(name));
+    lowering.baked.extend(baked);
+    let (lowered, wgsl) = lower_and_emit(&front, &lowering)?;
+    Ok(LoadedShader { front, lowered, wgsl, textures: Vec::new() })
 }
 
 /// Reads and checks `file` (the bundled Freeman sky without one), printing its diagnostics.
@@ -743,7 +751,7 @@ pub fn load_shader_baking(
 fn check_front(file: Option<&Path>) -> Result<gdsky::FrontendOutput, ExitCode> {
     let color = std::io::stderr().is_terminal() && std::env::var_os("NO_COLOR").is_none();
     let front = match file {
-        Some(path) => gdsky::godot::check_file(path).map_err(|err| {
+        Some(path) => gdresource::check_file(path).map_err(|err| {
             eprintln!("error: cannot read {}: {err}", path.display());
             ExitCode::from(2)
         })?,
@@ -758,15 +766,13 @@ fn check_front(file: Option<&Path>) -> Result<gdsky::FrontendOutput, ExitCode> {
     Ok(front)
 }
 
-/// Lowers a checked shader with `baked` uniforms as constants and `overrides` as
-/// pipeline-overridable constants, and emits its WGSL; diagnostics printed, exit 1.
+/// Lowers a checked shader as `lowering` says and emits its WGSL; diagnostics printed, exit 1.
 fn lower_and_emit(
     front: &gdsky::FrontendOutput,
-    baked: &HashMap<String, String>,
-    overrides: &[String],
+    lowering: &gdsky_naga::LowerOptions,
 ) -> Result<(gdsky_naga::Lowered, String), ExitCode> {
     let color = std::io::stderr().is_terminal() && std::env::var_os("NO_COLOR").is_none();
-    let lowered = gdsky_naga::lower_with_overrides(front, baked, overrides).map_err(|diags| {
+    let lowered = gdsky_naga::lower(front, lowering).map_err(|diags| {
         eprint!("{}", render_human(&front.db, &diags, color));
         ExitCode::from(1)
     })?;
@@ -778,12 +784,24 @@ fn lower_and_emit(
 }
 
 impl LoadedShader {
+    /// The uniforms baked into constants (`--bake-scene`), name → value.
+    pub fn baked(&self) -> &HashMap<String, String> {
+        &self.lowered.options.baked
+    }
+
+    /// The uniforms emitted as pipeline-overridable constants (`--override`), the k-th with
+    /// `@id(k)`.
+    pub fn overrides(&self) -> &[String] {
+        &self.lowered.options.overrides
+    }
+
     /// Lowers the shader again with `baked` uniforms as constants (`--bake-scene` of `bench`,
     /// after the Freeman-compatibility check) and `overrides` as pipeline-overridable
     /// constants. Exit 1 when a value does not fit or an override is not a scalar uniform.
     pub fn respecialize(&mut self, baked: HashMap<String, String>, overrides: &[String]) -> Result<(), ExitCode> {
-        let (lowered, wgsl) = lower_and_emit(&self.front, &baked, overrides)?;
-        (self.lowered, self.wgsl, self.baked, self.overrides) = (lowered, wgsl, baked, overrides.to_vec());
+        let lowering =
+            gdsky_naga::LowerOptions { baked, overrides: overrides.to_vec(), ..self.lowered.options.clone() };
+        (self.lowered, self.wgsl) = lower_and_emit(&self.front, &lowering)?;
         Ok(())
     }
 }
@@ -871,7 +889,7 @@ pub fn load_textures(
     // work (the same check `SkyShader::set_texture` makes); a module the harness cannot
     // bind fails later with its own message.
     let declared = skyrun::bindings::discover(&loaded.wgsl).unwrap_or_default();
-    let names = gdsky::scene::texture_names(shader);
+    let names = shader.texture_names();
     let mut textures = Vec::with_capacity(wanted.len());
     for (name, path, from_scene) in wanted {
         let fail = |message: String, code: u8| {
@@ -886,7 +904,7 @@ pub fn load_textures(
             // sampler uniform) is as unknown as a typo.
             let origin = if from_scene { format!("`textures.{name}`") } else { format!("`--texture {name}=…`") };
             let mut message = format!("{origin}: the shader has no sampler uniform `{name}`");
-            match gdsky::scene::did_you_mean(&name, names.iter().map(String::as_str)) {
+            match gdshader::diag::did_you_mean(&name, names.iter().map(String::as_str)) {
                 Some(m) => message.push_str(&format!("; did you mean `{m}`?")),
                 None if names.is_empty() => message.push_str(" (it has no sampler uniforms)"),
                 None => message.push_str(&format!("; its sampler uniforms are: {}", names.join(", "))),

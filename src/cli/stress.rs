@@ -185,7 +185,7 @@ fn stress(args: &StressArgs) -> Result<ExitCode, ExitCode> {
     let input = super::scene::open_input(args.file.as_deref())?;
     // A shader skyref does not model is measured against its own f64 evaluation.
     if let Some(file) = input.shader.as_deref()
-        && let Ok(front) = gdsky::godot::check_file(file)
+        && let Ok(front) = gdresource::check_file(file)
         && front.shader.as_ref().is_some_and(|s| !gdsky::measure::freeman::compatible(s))
     {
         if args.reference.is_some() {
@@ -196,7 +196,7 @@ fn stress(args: &StressArgs) -> Result<ExitCode, ExitCode> {
             )));
         }
         let sets = input.scene.as_ref().map(|f| f.uniform_pairs()).unwrap_or_default();
-        let loaded = super::scene::load_shader(Some(file))?;
+        let loaded = super::scene::load_shader(Some(file), &gdsky::measure::any::measuring_options())?;
         let textures = super::scene::load_textures(&args.textures, input.scene.as_ref(), &loaded)?;
         return stress_any(args, file, front, sets, textures);
     }

@@ -22,7 +22,7 @@ pub fn freeman_names() -> Vec<&'static str> {
 /// integral, so it is the truth only for such a shader. Exit 1 when it is not (or is invalid),
 /// 2 when it cannot be read.
 pub fn load_freeman(file: Option<&Path>) -> Result<LoadedShader, ExitCode> {
-    let loaded = load_shader(file)?;
+    let loaded = load_shader(file, &gdsky::measure::any::measuring_options())?;
     let shader = loaded.front.shader.as_ref().ok_or(ExitCode::from(1))?;
     let name = file.map(|f| f.display().to_string()).unwrap_or_else(|| super::scene::BUNDLED_NAME.to_string());
     // freeman_lut's table is an input of the same model, baked from these uniforms

@@ -92,7 +92,7 @@ pub fn run(args: &TuneArgs) -> ExitCode {
 /// shader's own uniform defaults.
 fn freeman_truth(shader: &gdsky::CheckedShader, shots: &[Shot]) -> Result<Vec<Vec<[f64; 4]>>, String> {
     let mut params = skyref::FreemanParams::default();
-    let mut defaults: Vec<(String, String)> = gdsky_naga::reflect::defaults_as_set(shader).into_iter().collect();
+    let mut defaults: Vec<(String, String)> = gdshader::values::defaults_as_set(shader).into_iter().collect();
     defaults.sort();
     for (name, value) in &defaults {
         if name != "transmittance_table" {

@@ -11,7 +11,6 @@ use super::knobs::{self, Discovered, KnobKind};
 use super::stats::{self, ErrorStats};
 use skyref::{Projection, Scene};
 use skyrun::{F64Sky, Gpu, RenderOptions, SkyBuiltins, SkyResolution, SkyShader};
-use std::collections::HashMap;
 use std::time::Duration;
 
 /// One image to render: the scene (sun, camera, TIME), the projection and the size.
@@ -42,6 +41,13 @@ impl Shot {
 /// The scene the generic sweeps start from: camera 1 m up looking north, light on.
 pub fn day_scene(sun: f64) -> Scene {
     Scene::default().with_sun(sun, 0.0).with_position(glam::DVec3::new(0.0, 1.0, 0.0)).with_fov(75.0)
+}
+
+/// How the measuring engine lowers every configuration and its truth: as Godot 4.6 computes
+/// SKY_COORDS, but without Godot's debanding, whose ±1/255 dither is presentation noise added
+/// after the sky, not part of it, and would be counted as error.
+pub fn measuring_options() -> gdsky_naga::LowerOptions {
+    gdsky_naga::LowerOptions { debanding: gdsky_naga::Debanding::None, ..Default::default() }
 }
 
 /// One f64 image per shot.
@@ -197,7 +203,7 @@ impl Variant {
     /// Lowers, emits WGSL and compiles the f32 shader, with Godot's sub-passes, the textures'
     /// hint defaults and the sky's own textures ([`Sky::textures`]) bound.
     pub fn compile(&self, gpu: &Gpu) -> Result<Compiled, String> {
-        let lowered = gdsky_naga::lower(&self.front).map_err(diagnostics)?;
+        let lowered = gdsky_naga::lower(&self.front, &measuring_options()).map_err(diagnostics)?;
         self.compile_lowered(gpu, lowered)
     }
 
@@ -205,7 +211,7 @@ impl Variant {
     /// same colour, and as the alpha whether the device ran every loop; see
     /// [`Compiled::loops_cut`].
     pub fn compile_canary(&self, gpu: &Gpu) -> Result<Compiled, String> {
-        let lowered = gdsky_naga::lower(&self.front).map_err(diagnostics)?;
+        let lowered = gdsky_naga::lower(&self.front, &measuring_options()).map_err(diagnostics)?;
         let canary = gdsky_naga::trace::loop_budget(&self.front, &lowered).map_err(diagnostics)?;
         self.compile_lowered(gpu, canary)
     }
@@ -214,7 +220,7 @@ impl Variant {
     /// colour, and as the alpha the id of the first site that made a non-finite value, which
     /// the returned [`gdsky_naga::trace::Traced`] turns into places in the source.
     pub fn compile_traced(&self, gpu: &Gpu) -> Result<(Compiled, gdsky_naga::trace::Traced), String> {
-        let lowered = gdsky_naga::lower(&self.front).map_err(diagnostics)?;
+        let lowered = gdsky_naga::lower(&self.front, &measuring_options()).map_err(diagnostics)?;
         // Instrumented twice (the same ids: the rewrite is deterministic): one module is
         // compiled, the other kept for its site table.
         let compiled = gdsky_naga::trace::instrument(&self.front, &lowered).map_err(diagnostics)?;
@@ -238,7 +244,7 @@ impl Variant {
 
     /// Compiles the f64 evaluation (`skyrun::F64Sky`).
     pub fn compile_f64(&self, gpu: &Gpu) -> Result<Compiled64, String> {
-        let mut sky = F64Sky::new(gpu, &self.front, &HashMap::new()).map_err(|e| e.to_string())?;
+        let mut sky = F64Sky::new(gpu, &self.front, &measuring_options()).map_err(|e| e.to_string())?;
         for (name, data) in &self.textures {
             sky.set_texture(gpu, name, data).map_err(|e| format!("texture `{name}`: {e}"))?;
         }

@@ -51,6 +51,7 @@ pub mod check;
 pub mod diag;
 pub mod parse;
 pub mod preprocess;
+pub mod values;
 
 pub use check::CheckedShader;
 pub use diag::{Diagnostic, FileId, Label, Severity, SourceDb};

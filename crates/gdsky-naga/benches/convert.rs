@@ -20,7 +20,8 @@ impl Loader for NoIncludes {
 
 fn gdsky_path(src: &str) -> (String, Vec<u32>) {
     let front = gdshader::check_source("freeman_sky.gdshader", src.as_bytes().to_vec(), None, &mut NoIncludes);
-    let lowered = gdsky_naga::lower(&front).unwrap_or_else(|_| panic!("the Freeman sky converts"));
+    let lowered = gdsky_naga::lower(&front, &gdsky_naga::LowerOptions::default())
+        .unwrap_or_else(|_| panic!("the Freeman sky converts"));
     let wgsl = gdsky_naga::to_wgsl(&lowered).expect("wgsl");
     let spirv = gdsky_naga::to_spirv(&lowered).expect("spirv");
     (wgsl, spirv)
@@ -58,9 +59,14 @@ fn convert(c: &mut Criterion) {
     });
     let front = gdshader::check_source("freeman_sky.gdshader", FREEMAN.as_bytes().to_vec(), None, &mut NoIncludes);
     stages.bench_function("lower + validate", |b| {
-        b.iter(|| gdsky_naga::lower(black_box(&front)).map(|l| l.material_size).unwrap_or(0))
+        b.iter(|| {
+            gdsky_naga::lower(black_box(&front), &gdsky_naga::LowerOptions::default())
+                .map(|l| l.material_size)
+                .unwrap_or(0)
+        })
     });
-    let lowered = gdsky_naga::lower(&front).unwrap_or_else(|_| panic!("converts"));
+    let lowered =
+        gdsky_naga::lower(&front, &gdsky_naga::LowerOptions::default()).unwrap_or_else(|_| panic!("converts"));
     stages.bench_function("WGSL + SPIR-V", |b| {
         b.iter(|| {
             (gdsky_naga::to_wgsl(black_box(&lowered)).map(|w| w.len()), gdsky_naga::to_spirv(&lowered).map(|s| s.len()))

@@ -17,7 +17,8 @@
 //! constants itself (see `spec_constants`), and the re-read checks each comes back as an
 //! override with its id and default.
 
-use crate::{BACKEND, Lowered, REREAD, validator};
+use crate::valid::{validator, validator_for};
+use crate::{BACKEND, Lowered, REREAD};
 use gdshader::parse::ast;
 use gdshader::{Diagnostic, FrontendOutput};
 
@@ -244,6 +245,22 @@ pub fn reread_wgsl(module: &naga::Module, text: &str) -> Result<(), EmitError> {
 /// which each override is an ordinary constant with a sentinel value found nowhere else, and
 /// turns that one constant of the binary into the specialization constant.
 pub fn to_spirv(lowered: &Lowered) -> Result<Vec<u32>, EmitError> {
+    to_spirv_with(lowered, &SpirvOptions::default())
+}
+
+/// What [`to_spirv_with`] writes besides the code. The default is the same bytes from every build
+/// of gdsky: naga's writer adds debug names by default only when *it* was compiled with debug
+/// assertions, so a debug build script and a release CLI would write different SPIR-V for one
+/// shader.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SpirvOptions {
+    /// `OpName`/`OpMemberName` for every function, variable and member (naga's `DEBUG` writer
+    /// flag): readable disassembly and GPU debuggers, about 12 % more bytes.
+    pub debug_names: bool,
+}
+
+/// [`to_spirv`] with `options`.
+pub fn to_spirv_with(lowered: &Lowered, spirv: &SpirvOptions) -> Result<Vec<u32>, EmitError> {
     let fail = |message: String, reread| EmitError {
         format: "SPIR-V",
         message,
@@ -252,7 +269,11 @@ pub fn to_spirv(lowered: &Lowered) -> Result<Vec<u32>, EmitError> {
         function: None,
         limitation: false,
     };
-    let options = naga::back::spv::Options { lang_version: (1, 3), fake_missing_bindings: true, ..Default::default() };
+    use naga::back::spv::WriterFlags;
+    let mut flags = WriterFlags::ADJUST_COORDINATE_SPACE | WriterFlags::LABEL_VARYINGS | WriterFlags::CLAMP_FRAG_DEPTH;
+    flags.set(WriterFlags::DEBUG, spirv.debug_names);
+    let options =
+        naga::back::spv::Options { lang_version: (1, 3), fake_missing_bindings: true, flags, ..Default::default() };
     let words = if lowered.module.overrides.is_empty() {
         naga::back::spv::write_vec(&lowered.module, &lowered.info, &options, None)
             .map_err(|e| fail(format!("naga's SPIR-V writer failed: {e}"), false))?
@@ -264,8 +285,8 @@ pub fn to_spirv(lowered: &Lowered) -> Result<Vec<u32>, EmitError> {
     let mut reread = naga::front::spv::parse_u8_slice(&bytes, &naga::front::spv::Options::default())
         .map_err(|e| fail(format!("the emitted SPIR-V does not re-read with naga's SPIR-V front end: {e}"), true))?;
     complete_spirv_reread(&mut reread);
-    // An f64 module (`lower_f64`) re-reads with f64 types and needs FLOAT64.
-    crate::validator_for(&reread)
+    // An f64 module re-reads with f64 types and needs FLOAT64.
+    validator_for(&reread)
         .validate(&reread)
         .map_err(|e| fail(format!("the re-read SPIR-V does not validate: {}", error_chain(e.as_inner())), true))?;
     // Every override reads back as the specialization constant of its id, with its default.

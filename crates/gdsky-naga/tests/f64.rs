@@ -2,8 +2,7 @@
 //! naga validates with FLOAT64, whose SPIR-V (decorated `NoContraction`, as the driver gets it)
 //! `spirv-val` accepts, and whose f32 lowering (and so the snapshots) does not change.
 
-use gdsky_naga::{F64Output, lower_f64, to_spirv};
-use std::collections::HashMap;
+use gdsky_naga::{F64Output, lower, to_spirv};
 use std::path::{Path, PathBuf};
 
 fn shaders() -> Vec<PathBuf> {
@@ -46,12 +45,15 @@ fn every_shader_widens_validates_and_passes_spirv_val() {
     for path in shaders() {
         let front = gdshader::check_file(&path).expect("readable");
         // Shaders the f32 path refuses are not the f64 path's business.
-        if front.shader.is_none() || gdsky_naga::lower(&front).is_err() {
+        if front.shader.is_none() || gdsky_naga::lower(&front, &gdsky_naga::LowerOptions::default()).is_err() {
             continue;
         }
         let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("shader").to_string();
         for output in [F64Output::Nearest, F64Output::Residual] {
-            match lower_f64(&front, &HashMap::new(), output) {
+            match lower(
+                &front,
+                &gdsky_naga::LowerOptions { precision: gdsky_naga::Precision::F64(output), ..Default::default() },
+            ) {
                 Err(d) => failures.push(format!(
                     "{name} {output:?}: {}",
                     d.iter().map(|d| format!("{} {:?}", d.message, d.notes)).collect::<Vec<_>>().join("; ")

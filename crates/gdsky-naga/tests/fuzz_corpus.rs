@@ -33,7 +33,7 @@ fn every_accepted_corpus_shader_lowers_and_reads_back() {
         }
         accepted += 1;
         let render = |d: &[gdshader::Diagnostic]| gdshader::diag::render_human(&front.db, d, false);
-        match gdsky_naga::lower(&front) {
+        match gdsky_naga::lower(&front, &gdsky_naga::LowerOptions::default()) {
             Err(diagnostics) => {
                 if diagnostics.iter().any(|d| d.code == gdsky_naga::INVALID_MODULE) {
                     failures.push(format!("{}:\n{}", path.display(), render(&diagnostics)));

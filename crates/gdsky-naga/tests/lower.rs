@@ -2,7 +2,6 @@
 //! (re-parsed and validated again by naga's WGSL front end) and as SPIR-V (checked by
 //! `spirv-val --target-env vulkan1.1`). WGSL and reflection of each are snapshots.
 
-use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -16,7 +15,7 @@ const NOT_YET: &[(&str, &str)] = &[];
 
 struct Converted {
     wgsl: String,
-    reflection: serde_json::Value,
+    reflection: gdsky_naga::reflect::Reflection,
 }
 
 fn convert(rel: &str) -> Result<Converted, String> {
@@ -25,7 +24,8 @@ fn convert(rel: &str) -> Result<Converted, String> {
     let front = gdshader::check_file(Path::new(rel)).map_err(|e| e.to_string())?;
     let shader =
         front.shader.as_ref().ok_or_else(|| gdshader::diag::render_human(&front.db, &front.diagnostics, false))?;
-    let lowered = gdsky_naga::lower(&front).map_err(|d| gdshader::diag::render_human(&front.db, &d, false))?;
+    let lowered = gdsky_naga::lower(&front, &gdsky_naga::LowerOptions::default())
+        .map_err(|d| gdshader::diag::render_human(&front.db, &d, false))?;
     let wgsl = gdsky_naga::to_wgsl(&lowered).map_err(|e| format!("WGSL writer: {e}"))?;
     let reparsed = naga::front::wgsl::parse_str(&wgsl)
         .map_err(|e| format!("WGSL does not re-parse: {}", e.emit_to_string(&wgsl)))?;
@@ -35,7 +35,7 @@ fn convert(rel: &str) -> Result<Converted, String> {
     let words = gdsky_naga::to_spirv(&lowered).map_err(|e| format!("SPIR-V writer: {e}"))?;
     spirv_val(rel, &words)?;
     let name = Path::new(rel).file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-    let reflection = gdsky_naga::reflect::reflection(&name, shader, &lowered, &HashMap::new());
+    let reflection = gdsky_naga::reflect::reflection(&name, shader, &lowered);
     Ok(Converted { wgsl, reflection })
 }
 
@@ -96,7 +96,7 @@ fn every_valid_test_shader_converts() {
 fn builtins_block_layout_is_fixed() {
     let _ = std::env::set_current_dir(root());
     let front = gdshader::check_file(Path::new("fixtures/freeman_sky.gdshader")).expect("readable");
-    let lowered = gdsky_naga::lower(&front).expect("lowers");
+    let lowered = gdsky_naga::lower(&front, &gdsky_naga::LowerOptions::default()).expect("lowers");
     let module = &lowered.module;
     let layout = |name: &str| {
         let ty = module
@@ -146,7 +146,7 @@ fn a_validation_error_points_at_the_shader_line() {
     let _ = std::env::set_current_dir(root());
     let path = Path::new("fixtures/freeman_sky.gdshader");
     let front = gdshader::check_file(path).expect("readable");
-    let mut module = gdsky_naga::lower(&front).expect("lowers").module;
+    let mut module = gdsky_naga::lower(&front, &gdsky_naga::LowerOptions::default()).expect("lowers").module;
     let int = module
         .types
         .insert(naga::Type { name: None, inner: naga::TypeInner::Scalar(naga::Scalar::I32) }, naga::Span::UNDEFINED);

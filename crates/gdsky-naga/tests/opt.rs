@@ -16,7 +16,7 @@ fn freeman() -> gdshader::FrontendOutput {
 }
 
 fn wgsl(front: &gdshader::FrontendOutput) -> String {
-    gdsky_naga::to_wgsl(&gdsky_naga::lower(front).expect("lowers")).expect("WGSL")
+    gdsky_naga::to_wgsl(&gdsky_naga::lower(front, &gdsky_naga::LowerOptions::default()).expect("lowers")).expect("WGSL")
 }
 
 /// The text of `fn sky()` in emitted WGSL.
@@ -100,16 +100,28 @@ fn a_baked_bool_removes_the_branch_not_taken() {
     let generic = sky_body(&generic);
     assert!(generic.contains("sin(") && generic.contains("cos("), "{generic}");
     let baked: HashMap<String, String> = [("fancy".to_string(), "false".to_string())].into();
-    let w = gdsky_naga::to_wgsl(&gdsky_naga::lower_with(&f, &baked).expect("lowers")).expect("WGSL");
+    let w = gdsky_naga::to_wgsl(
+        &gdsky_naga::lower(&f, &gdsky_naga::LowerOptions { baked: baked.clone(), ..Default::default() })
+            .expect("lowers"),
+    )
+    .expect("WGSL");
     let w = sky_body(&w);
     assert!(!w.contains("sin("), "the branch of a false baked bool is gone:\n{w}");
     assert!(w.contains("cos("), "{w}");
     let baked: HashMap<String, String> = [("fancy".to_string(), "false".into()), ("k".into(), "1.0".into())].into();
-    let w = gdsky_naga::to_wgsl(&gdsky_naga::lower_with(&f, &baked).expect("lowers")).expect("WGSL");
+    let w = gdsky_naga::to_wgsl(
+        &gdsky_naga::lower(&f, &gdsky_naga::LowerOptions { baked: baked.clone(), ..Default::default() })
+            .expect("lowers"),
+    )
+    .expect("WGSL");
     let w = sky_body(&w);
     assert!(!w.contains("sin(") && !w.contains("cos(") && !w.contains("if "), "only the else is left:\n{w}");
     let baked: HashMap<String, String> = [("fancy".to_string(), "true".to_string())].into();
-    let w = gdsky_naga::to_wgsl(&gdsky_naga::lower_with(&f, &baked).expect("lowers")).expect("WGSL");
+    let w = gdsky_naga::to_wgsl(
+        &gdsky_naga::lower(&f, &gdsky_naga::LowerOptions { baked: baked.clone(), ..Default::default() })
+            .expect("lowers"),
+    )
+    .expect("WGSL");
     let w = sky_body(&w);
     assert!(w.contains("sin(") && !w.contains("cos(") && !w.contains("if "), "only the taken branch:\n{w}");
 }
@@ -117,14 +129,15 @@ fn a_baked_bool_removes_the_branch_not_taken() {
 #[test]
 fn three_sets_on_the_freeman_sky_remove_three_uniforms_and_shrink_the_spirv() {
     let f = freeman();
-    let generic = gdsky_naga::lower(&f).expect("lowers");
+    let generic = gdsky_naga::lower(&f, &gdsky_naga::LowerOptions::default()).expect("lowers");
     let baked: HashMap<String, String> = [
         ("view_samples".to_string(), "24".to_string()),
         ("sun_samples".into(), "8".into()),
         ("ozone_width".into(), "30000.0".into()),
     ]
     .into();
-    let set = gdsky_naga::lower_with(&f, &baked).expect("lowers");
+    let set = gdsky_naga::lower(&f, &gdsky_naga::LowerOptions { baked: baked.clone(), ..Default::default() })
+        .expect("lowers");
     assert_eq!(set.uniforms.len() + 3, generic.uniforms.len());
     for n in baked.keys() {
         assert!(!set.uniforms.contains_key(n));
@@ -139,20 +152,20 @@ fn three_sets_on_the_freeman_sky_remove_three_uniforms_and_shrink_the_spirv() {
 fn overrides_are_wgsl_overrides_and_listed_in_the_reflection() {
     let f = freeman();
     let names = ["sun_intensity".to_string(), "view_samples".to_string()];
-    let lowered = gdsky_naga::lower_with_overrides(&f, &HashMap::new(), &names).expect("lowers");
+    let lowered = gdsky_naga::lower(&f, &gdsky_naga::LowerOptions { overrides: names.to_vec(), ..Default::default() })
+        .expect("lowers");
     let w = gdsky_naga::to_wgsl(&lowered).expect("WGSL");
     assert!(w.contains("@id(0) override sun_intensity: f32 = 62.832f;"), "{w}");
     assert!(w.contains("@id(1) override view_samples: i32 = 24i;"), "{w}");
     assert!(!w.contains("material.sun_intensity") && !w.contains("material.view_samples"), "{w}");
     let shader = f.shader.as_ref().expect("checked");
-    let r = gdsky_naga::reflect::reflection("freeman", shader, &lowered, &HashMap::new());
-    let overrides = r["overrides"].as_array().expect("overrides");
+    let r = gdsky_naga::reflect::reflection("freeman", shader, &lowered);
+    let overrides = &r.overrides;
     assert_eq!(overrides.len(), 2);
-    assert_eq!(overrides[1]["name"], "view_samples");
-    assert_eq!(overrides[1]["id"], 1);
-    assert_eq!(overrides[1]["default"], 24);
-    let uniforms: Vec<&str> =
-        r["uniforms"].as_array().expect("uniforms").iter().filter_map(|u| u["name"].as_str()).collect();
+    assert_eq!(overrides[1].name.as_deref(), Some("view_samples"));
+    assert_eq!(overrides[1].id, Some(1));
+    assert_eq!(overrides[1].default, Some(serde_json::json!(24)));
+    let uniforms: Vec<&str> = r.uniforms.iter().map(|u| u.name.as_str()).collect();
     assert!(!uniforms.contains(&"view_samples") && uniforms.contains(&"sun_samples"), "{uniforms:?}");
     // In SPIR-V each override is a specialization constant: `OpSpecConstant` (opcode 50) with its
     // default, decorated `SpecId` (decoration 1) with its id.
@@ -182,7 +195,9 @@ fn an_override_the_spirv_writer_folds_into_a_composite_is_refused() {
     // constant: refused (E602) rather than written wrong; the WGSL is fine.
     let src = "shader_type sky;\nuniform float k = 0.5;\nvoid sky() { COLOR = vec3(k) * EYEDIR; }\n";
     let f = gdshader::check_source("splat.gdshader", src.as_bytes().to_vec(), None, &mut gdshader::FsLoader);
-    let lowered = gdsky_naga::lower_with_overrides(&f, &HashMap::new(), &["k".to_string()]).expect("lowers");
+    let lowered =
+        gdsky_naga::lower(&f, &gdsky_naga::LowerOptions { overrides: vec!["k".to_string()], ..Default::default() })
+            .expect("lowers");
     gdsky_naga::to_wgsl(&lowered).expect("WGSL");
     let err = gdsky_naga::to_spirv(&lowered).expect_err("refused");
     assert!(!err.reread && err.message.contains("cannot write the override `k` as a specialization constant"), "{err}");
@@ -202,7 +217,12 @@ fn bad_overrides_are_refused() {
     ] {
         let names: Vec<String> = names.into_iter().map(String::from).collect();
         let baked: HashMap<String, String> = baked.into_iter().map(|(a, b)| (a.to_string(), b.to_string())).collect();
-        let errors = gdsky_naga::lower_with_overrides(&f, &baked, &names).err().expect("refused");
+        let errors = gdsky_naga::lower(
+            &f,
+            &gdsky_naga::LowerOptions { baked: baked.clone(), overrides: names.to_vec(), ..Default::default() },
+        )
+        .err()
+        .expect("refused");
         assert!(
             errors.iter().any(|d| d.code == gdsky_naga::BAD_SET && d.message.contains(why)),
             "{names:?}: {errors:?}"

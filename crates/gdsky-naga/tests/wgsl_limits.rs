@@ -22,7 +22,7 @@ fn a_long_expression_chain_reads_back() {
     let source =
         format!("shader_type sky;\nuniform float u;\nvoid sky() {{ COLOR = vec3(u{}); }}\n", " + u".repeat(400));
     let front = front(&source);
-    let lowered = gdsky_naga::lower(&front).expect("lowers");
+    let lowered = gdsky_naga::lower(&front, &gdsky_naga::LowerOptions::default()).expect("lowers");
     let wgsl = gdsky_naga::to_wgsl(&lowered).expect("the WGSL reads back");
     assert!(wgsl.contains("let part"), "long chains are cut into named parts:\n{wgsl}");
     gdsky_naga::to_spirv(&lowered).expect("the SPIR-V reads back");
@@ -32,7 +32,7 @@ fn a_long_expression_chain_reads_back() {
 fn deep_but_legal_nesting_reads_back() {
     // The function body's braces and 125 `if`s: 126 of WGSL's 127.
     let front = front(&nested_ifs(125));
-    let lowered = gdsky_naga::lower(&front).expect("lowers");
+    let lowered = gdsky_naga::lower(&front, &gdsky_naga::LowerOptions::default()).expect("lowers");
     gdsky_naga::to_wgsl(&lowered).expect("the WGSL reads back");
 }
 
@@ -47,7 +47,7 @@ fn nesting_deeper_than_wgsl_allows_is_refused_at_the_statement() {
     );
     let front = front(&source);
     assert!(front.shader.is_some(), "the front end accepts it, as Godot does");
-    let diagnostics = gdsky_naga::lower(&front).err().expect("refused");
+    let diagnostics = gdsky_naga::lower(&front, &gdsky_naga::LowerOptions::default()).err().expect("refused");
     assert_eq!(diagnostics.len(), 1);
     let d = &diagnostics[0];
     assert_eq!(d.code, gdsky_naga::UNSUPPORTED, "{d:?}");

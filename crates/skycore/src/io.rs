@@ -318,46 +318,85 @@ pub fn create_output_dir(dir: &Path) -> io::Result<()> {
 /// symbolic links to their target, over a regular file (keeping its permission bits) or into a
 /// new one, never over a directory, device, FIFO or socket; nothing is left behind on failure.
 pub fn write_atomically(path: &Path, bytes: &[u8]) -> io::Result<()> {
+    stage(path, bytes)?.commit()
+}
+
+/// Writes several files as a set: every file is first written and flushed to a temporary file
+/// beside its target ([`write_atomically`]'s rules for each), and only when all of them are on
+/// disk are they renamed into place, in order. A failure while writing (a full disk, a path
+/// refused) removes every temporary file and leaves every target as it was. Each rename is
+/// atomic, but the set's renames follow each other: a crash between two leaves the first new
+/// and the rest old.
+pub fn write_set(files: &[(&Path, &[u8])]) -> io::Result<()> {
+    let staged = files.iter().map(|(path, bytes)| stage(path, bytes)).collect::<io::Result<Vec<_>>>()?;
+    for file in staged {
+        file.commit()?;
+    }
+    Ok(())
+}
+
+/// A file written to its temporary name, waiting to be renamed over its target; dropped
+/// uncommitted, the temporary file is removed.
+struct Staged<'a> {
+    path: &'a Path,
+    target: PathBuf,
+    tmp: PathBuf,
+    committed: bool,
+}
+
+/// Writes `bytes` to a temporary file beside where `path` lands, flushed to disk.
+fn stage<'a>(path: &'a Path, bytes: &[u8]) -> io::Result<Staged<'a>> {
     let target = resolve_output(path)?;
     let tmp = temporary_path(&target, "tmp");
     let mut file = create_temporary(&tmp)?;
-    let result = (|| {
-        file.write_all(bytes)?;
-        if let Ok(old) = fs::metadata(&target) {
-            // The new file keeps the old one's mode (a 0600 key file stays private). Owner and
-            // group cannot be kept without privileges; the new file is the writer's.
-            let _ = file.set_permissions(old.permissions());
-        }
-        file.sync_all()?;
-        drop(file); // closed before the rename, which Windows requires
+    let staged = Staged { path, target, tmp, committed: false };
+    file.write_all(bytes)?;
+    if let Ok(old) = fs::metadata(&staged.target) {
+        // The new file keeps the old one's mode (a 0600 key file stays private). Owner and
+        // group cannot be kept without privileges; the new file is the writer's.
+        let _ = file.set_permissions(old.permissions());
+    }
+    file.sync_all()?;
+    // Closed before the rename, which Windows requires.
+    drop(file);
+    Ok(staged)
+}
+
+impl Staged<'_> {
+    /// Renames the temporary file over the target.
+    fn commit(mut self) -> io::Result<()> {
         // Checked again: a special file put there since the write started is not replaced.
-        match fs::symlink_metadata(&target) {
-            Ok(meta) if !meta.is_file() => {
-                return Err(Error::new(
-                    ErrorKind::InvalidInput,
-                    format!(
-                        "{} became {} during the write; not replaced",
-                        subject(path, &target),
-                        file_kind(&meta.file_type())
-                    ),
-                ));
-            }
-            _ => {}
+        if let Ok(meta) = fs::symlink_metadata(&self.target)
+            && !meta.is_file()
+        {
+            return Err(Error::new(
+                ErrorKind::InvalidInput,
+                format!(
+                    "{} became {} during the write; not replaced",
+                    subject(self.path, &self.target),
+                    file_kind(&meta.file_type())
+                ),
+            ));
         }
-        fs::rename(&tmp, &target)
+        fs::rename(&self.tmp, &self.target)
             .map_err(|err| Error::new(err.kind(), format!("cannot rename the temporary file into place: {err}")))?;
+        self.committed = true;
         // The rename is durable once the directory is flushed too (best effort: not every
         // platform or file system lets a directory be opened and synced).
         #[cfg(unix)]
-        if let Ok(dir) = fs::File::open(parent_dir(&target)) {
+        if let Ok(dir) = fs::File::open(parent_dir(&self.target)) {
             let _ = dir.sync_all();
         }
         Ok(())
-    })();
-    if result.is_err() {
-        let _ = fs::remove_file(&tmp);
     }
-    result
+}
+
+impl Drop for Staged<'_> {
+    fn drop(&mut self) {
+        if !self.committed {
+            let _ = fs::remove_file(&self.tmp);
+        }
+    }
 }
 
 #[cfg(all(test, unix))]

@@ -12,7 +12,7 @@
 //!   degrees, the camera by a vertical field of view, a yaw and a pitch (Euler YXZ).
 //! * [`Projection`]: how a pixel becomes EYEDIR (panorama, camera, a cube face), and the
 //!   fragment entry of a converted module that draws it; [`SkyResolution`]: the fraction of a
-//!   view the sky is shaded at.
+//!   view the sky is shaded at; [`DepthConvention`]: where the far plane is.
 //! * [`UniformValue`]: a value for one uniform, whoever takes it (the material block, Godot).
 //! * [`TextureData`]: the texels of a material texture (2D, cube map, 3D) with their format;
 //!   mip levels made as Godot makes them.
@@ -29,7 +29,8 @@ mod texture;
 mod uniform;
 
 pub use scene::{
-    Camera, Light, MAX_LIGHTS, Projection, Scene, SkyResolution, cube_face_basis, direction as light_direction,
+    Camera, DepthConvention, Light, MAX_LIGHTS, Projection, Scene, SkyResolution, cube_face_basis,
+    direction as light_direction,
 };
 pub use texture::{
     MAX_TEXTURE_SIDE, MAX_VOLUME_SIDE, TexelFormat, TextureData, TextureError, TextureShape, f16_to_f32, f32_to_f16,

@@ -281,6 +281,50 @@ pub fn cube_face_basis(face: u8) -> DMat3 {
     DMat3::from_cols(x, z.cross(x), z)
 }
 
+/// Where the sky lies in depth: on the far plane, so that a depth test against geometry drawn
+/// before it skips every covered pixel (as Godot draws its sky behind its geometry). Which
+/// depth the far plane has depends on the renderer's convention.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+pub enum DepthConvention {
+    /// Near 0, far 1: the sky at depth 1, test `LessEqual`, depth cleared to 1.
+    #[default]
+    Standard,
+    /// Near 1, far 0 (reversed Z, Bevy's and many engines' choice for precision): the sky at
+    /// depth 0, test `GreaterEqual`, depth cleared to 0.
+    Reversed,
+}
+
+impl DepthConvention {
+    /// Both conventions' names, as [`DepthConvention::name`] gives them.
+    pub const NAMES: [&'static str; 2] = ["standard_z", "reversed_z"];
+
+    /// The depth of the far plane, where the sky is drawn (and the value the depth buffer is
+    /// cleared to).
+    pub fn far_plane(self) -> f32 {
+        match self {
+            DepthConvention::Standard => 1.0,
+            DepthConvention::Reversed => 0.0,
+        }
+    }
+
+    /// `standard_z` or `reversed_z`.
+    pub fn name(self) -> &'static str {
+        match self {
+            DepthConvention::Standard => "standard_z",
+            DepthConvention::Reversed => "reversed_z",
+        }
+    }
+
+    /// The depth test that keeps what is nearer than the sky: `less_equal` or `greater_equal`
+    /// (as WebGPU names the compare functions).
+    pub fn compare_name(self) -> &'static str {
+        match self {
+            DepthConvention::Standard => "less_equal",
+            DepthConvention::Reversed => "greater_equal",
+        }
+    }
+}
+
 /// The resolution the sky is shaded at, as a fraction of the view (gdsky's reduced sky
 /// resolution, upsampled on the GPU; the same divisors as Godot's half- and quarter-resolution
 /// passes).

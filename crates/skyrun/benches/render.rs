@@ -45,20 +45,24 @@ fn render_time(c: &mut Criterion) {
     }
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/freeman_sky.gdshader");
     let front = gdshader::check_file(&path).expect("fixture readable");
-    let lowered = gdsky_naga::lower(&front).expect("the Freeman sky lowers");
+    let lowered = gdsky_naga::lower(&front, &gdsky_naga::LowerOptions::default()).expect("the Freeman sky lowers");
     let converted = gdsky_naga::to_wgsl(&lowered).expect("WGSL");
     let material = freeman_material(&lowered, &FreemanParams::default());
     // The f32-stable rewrite (issue #5): same uniforms, so the same material bytes.
     let stable_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shaders/freeman_stable.gdshader");
     let stable_front = gdshader::check_file(&stable_path).expect("shaders/freeman_stable.gdshader readable");
-    let stable_lowered = gdsky_naga::lower(&stable_front).expect("the stable sky lowers");
+    let stable_lowered =
+        gdsky_naga::lower(&stable_front, &gdsky_naga::LowerOptions::default()).expect("the stable sky lowers");
     let stable = gdsky_naga::to_wgsl(&stable_lowered).expect("WGSL");
     assert_eq!(freeman_material(&stable_lowered, &FreemanParams::default()), material, "same material layout");
     // Specialization (issue #11): every uniform baked at its default (`--set`), and every scalar
     // uniform as a WGSL override (`--override`) at its default.
     let shader = front.shader.as_ref().expect("checked");
-    let baked_lowered =
-        gdsky_naga::lower_with(&front, &gdsky_naga::reflect::defaults_as_set(shader)).expect("the baked sky lowers");
+    let baked_lowered = gdsky_naga::lower(
+        &front,
+        &gdsky_naga::LowerOptions { baked: gdshader::values::defaults_as_set(shader), ..Default::default() },
+    )
+    .expect("the baked sky lowers");
     let baked = gdsky_naga::to_wgsl(&baked_lowered).expect("WGSL");
     let baked_material = freeman_material(&baked_lowered, &FreemanParams::default());
     let scalars: Vec<String> = shader
@@ -68,7 +72,8 @@ fn render_time(c: &mut Criterion) {
         .map(|u| u.name.clone())
         .collect();
     let override_lowered =
-        gdsky_naga::lower_with_overrides(&front, &Default::default(), &scalars).expect("the override sky lowers");
+        gdsky_naga::lower(&front, &gdsky_naga::LowerOptions { overrides: scalars.to_vec(), ..Default::default() })
+            .expect("the override sky lowers");
     let overridden = gdsky_naga::to_wgsl(&override_lowered).expect("WGSL");
     let override_material = freeman_material(&override_lowered, &FreemanParams::default());
     let gpu = Gpu::new().unwrap_or_else(|e| panic!("the render bench needs a Vulkan adapter: {e}"));

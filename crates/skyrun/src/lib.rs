@@ -95,7 +95,7 @@
 //! use skyrun::{Gpu, SkyBuiltins, compare, freeman_material, render};
 //!
 //! let front = gdshader::check_file("fixtures/freeman_sky.gdshader".as_ref())?;
-//! let lowered = gdsky_naga::lower(&front).expect("the Freeman sky lowers");
+//! let lowered = gdsky_naga::lower(&front, &gdsky_naga::LowerOptions::default()).expect("the Freeman sky lowers");
 //! let wgsl = gdsky_naga::to_wgsl(&lowered)?;
 //! let params = FreemanParams::default();
 //! let scene = Scene::default();

@@ -174,7 +174,7 @@ pub fn material_with_defaults(
     }
     for (name, text) in overrides {
         let slot = in_block(name).ok_or_else(|| MaterialError::NoSuchUniform(name.clone()))?;
-        let value = gdsky_naga::reflect::parse_value(&slot.ty, text)
+        let value = gdshader::values::parse_value(&slot.ty, text)
             .map_err(|message| MaterialError::BadValue { name: name.clone(), message })?;
         write_const(&mut bytes, slot.offset as usize, &slot.ty, &value, slot.stride.unwrap_or(16) as usize);
     }

@@ -178,9 +178,9 @@ pub struct SkyShader {
     /// Values of the module's overrides (`gdsky convert --override`), by `@id` as text; an
     /// override not listed keeps its default.
     constants: Vec<(String, f64)>,
-    /// The depth `vs_main` gives the sky: its far plane (1 standard Z, 0 reversed Z), read from
-    /// the module ([`gdsky_naga::wrapper::far_plane_depth`]); 1 when it cannot be read.
-    far: f32,
+    /// Where `vs_main` puts the sky (the far plane of standard or reversed Z), read from the
+    /// module ([`gdsky_naga::depth_convention`]); standard Z when it cannot be read.
+    depth: skycore::DepthConvention,
     /// The upsampling pipeline of a reduced sky resolution, per (with depth test, filter), on
     /// first use.
     upsample: Mutex<HashMap<(bool, UpsampleFilter), wgpu::RenderPipeline>>,
@@ -285,10 +285,8 @@ impl SkyShader {
     ) -> Result<SkyShader, RenderError> {
         let bindings = bindings::discover(wgsl)?;
         // `discover` parsed it already, so this parse succeeds.
-        let far = naga::front::wgsl::parse_str(wgsl)
-            .ok()
-            .and_then(|m| gdsky_naga::wrapper::far_plane_depth(&m))
-            .unwrap_or(gdsky_naga::wrapper::FAR_PLANE_STANDARD);
+        let depth =
+            naga::front::wgsl::parse_str(wgsl).ok().and_then(|m| gdsky_naga::depth_convention(&m)).unwrap_or_default();
         let device = &gpu.device;
         scoped(gpu, || {
             let module = create();
@@ -335,7 +333,7 @@ impl SkyShader {
                 provided: HashMap::new(),
                 material_samplers: HashMap::new(),
                 constants: Vec::new(),
-                far,
+                depth,
                 upsample: Mutex::new(HashMap::new()),
             }
         })
@@ -425,14 +423,14 @@ impl SkyShader {
         self.bindings.iter().any(|b| b.group == group && b.binding == binding)
     }
 
-    /// The sky's far plane (the depth of `vs_main`): 1 with standard Z, 0 with reversed Z.
-    pub fn far_plane(&self) -> f32 {
-        self.far
+    /// Where the module puts the sky: the far plane of standard Z (depth 1) or reversed Z (0).
+    pub fn depth_convention(&self) -> skycore::DepthConvention {
+        self.depth
     }
 
     /// The depth test that hides the sky behind anything nearer than the far plane.
     fn depth_compare(&self) -> wgpu::CompareFunction {
-        if self.far == gdsky_naga::wrapper::FAR_PLANE_REVERSED {
+        if self.depth == skycore::DepthConvention::Reversed {
             wgpu::CompareFunction::GreaterEqual
         } else {
             wgpu::CompareFunction::LessEqual
@@ -896,7 +894,7 @@ impl SkyShader {
     /// either convention), the far plane elsewhere. Written from the host: the geometry a real
     /// renderer would have drawn first.
     fn depth_buffer(&self, gpu: &Gpu, occluder: &Occluder) -> wgpu::TextureView {
-        let far = if self.far == gdsky_naga::wrapper::FAR_PLANE_REVERSED { 0 } else { u16::MAX };
+        let far = if self.depth == skycore::DepthConvention::Reversed { 0 } else { u16::MAX };
         let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
             label: Some("occluder depth"),
             size: wgpu::Extent3d { width: occluder.width, height: occluder.height, depth_or_array_layers: 1 },
@@ -1016,7 +1014,7 @@ impl SkyShader {
             bytes.extend_from_slice(&(v as f32).to_le_bytes());
         }
         bytes.extend_from_slice(&u32::from(params.wrap_x).to_le_bytes());
-        bytes.extend_from_slice(&self.far.to_le_bytes());
+        bytes.extend_from_slice(&self.depth.far_plane().to_le_bytes());
         bytes.extend_from_slice(&[0; 8]);
         let buffer = uniform_buffer(gpu, "upsample params", &bytes);
         let sampler = if params.wrap_x { &self.panorama_sampler } else { &self.clamp_sampler };

@@ -6,7 +6,7 @@ use std::path::Path;
 fn freeman() -> gdsky_naga::Lowered {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/freeman_sky.gdshader");
     let front = gdshader::check_file(&path).expect("fixture readable");
-    gdsky_naga::lower(&front).expect("the Freeman sky lowers")
+    gdsky_naga::lower(&front, &gdsky_naga::LowerOptions::default()).expect("the Freeman sky lowers")
 }
 
 /// Member offsets and the span of the struct `name` in the lowered module.
@@ -132,7 +132,7 @@ fn shader_defaults_equal_skyrefs_hand_written_defaults() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/freeman_sky.gdshader");
     let front = gdshader::check_file(&path).expect("fixture readable");
     let shader = front.shader.as_ref().expect("checks");
-    let lowered = gdsky_naga::lower(&front).expect("lowers");
+    let lowered = gdsky_naga::lower(&front, &gdsky_naga::LowerOptions::default()).expect("lowers");
     let from_shader = material_with_defaults(shader, &lowered, &[]).expect("defaults");
     assert_eq!(from_shader, freeman_material(&lowered, &skyref::FreemanParams::default()));
 

@@ -17,7 +17,6 @@
 use crate::render::{RenderError, SkyShader, SubPasses};
 use crate::{Gpu, SkyBuiltins};
 use skycore::Projection;
-use std::collections::HashMap;
 use std::fmt;
 
 /// Why an f64 sky could not be built.
@@ -62,22 +61,24 @@ pub struct F64Sky {
 }
 
 impl F64Sky {
-    /// Lowers `front` in f64 (with `baked` uniforms, as `lower_with` takes them) and compiles it.
+    /// Lowers `front` in f64 (with `options` otherwise, their precision aside) and compiles it.
     /// Material textures are their hints' default texels until [`F64Sky::set_texture`] gives
     /// one; the other stand-ins are those [`SkyShader::render`] documents.
     pub fn new(
         gpu: &Gpu,
         front: &gdshader::FrontendOutput,
-        baked: &HashMap<String, String>,
+        options: &gdsky_naga::LowerOptions,
     ) -> Result<F64Sky, F64Error> {
         if !gpu.has_f64() {
             return Err(F64Error::NoF64);
         }
         let messages = |d: Vec<gdshader::Diagnostic>| F64Error::Lower(d.into_iter().map(|d| d.message).collect());
-        let f32_module = gdsky_naga::lower_with(front, baked).map_err(messages)?;
+        let f32_options = options.clone().with_precision(gdsky_naga::Precision::F32);
+        let f32_module = gdsky_naga::lower(front, &f32_options).map_err(messages)?;
         let wgsl = gdsky_naga::to_wgsl(&f32_module).map_err(|e| F64Error::Emit(format!("{e:?}")))?;
         let compile = |output| -> Result<(SkyShader, gdsky_naga::Lowered), F64Error> {
-            let lowered = gdsky_naga::lower_f64(front, baked, output).map_err(messages)?;
+            let f64_options = options.clone().with_precision(gdsky_naga::Precision::F64(output));
+            let lowered = gdsky_naga::lower(front, &f64_options).map_err(messages)?;
             let spirv = gdsky_naga::to_spirv(&lowered).map_err(|e| F64Error::Emit(format!("{e:?}")))?;
             let spirv = gdsky_naga::exact_arithmetic(&spirv);
             let entry_points: Vec<String> = lowered.module.entry_points.iter().map(|e| e.name.clone()).collect();
@@ -151,6 +152,6 @@ pub fn render_f64(
     builtins: &SkyBuiltins,
     material: &[u8],
 ) -> Result<Vec<[f64; 4]>, F64Error> {
-    let sky = F64Sky::new(gpu, front, &HashMap::new())?;
+    let sky = F64Sky::new(gpu, front, &gdsky_naga::LowerOptions::default())?;
     Ok(sky.render(gpu, projection, width, height, builtins, material)?)
 }

@@ -11,7 +11,6 @@ mod common;
 use glam::DVec3;
 use skyref::{FreemanParams, Projection, Scene};
 use skyrun::{F64Sky, SkyBuiltins, compare, freeman_material, render};
-use std::collections::HashMap;
 use std::time::Instant;
 
 const WIDTH: u32 = 64;
@@ -80,7 +79,8 @@ fn freeman_in_f64_on_the_gpu_matches_skyref_f64() {
     let builtins = SkyBuiltins::from_scene(&scene, WIDTH, HEIGHT);
 
     let t = Instant::now();
-    let sky = F64Sky::new(&gpu, &front, &HashMap::new()).unwrap_or_else(|e| panic!("f64 sky: {e}"));
+    let sky =
+        F64Sky::new(&gpu, &front, &gdsky_naga::LowerOptions::default()).unwrap_or_else(|e| panic!("f64 sky: {e}"));
     eprintln!("f64 modules compiled in {:.2?}", t.elapsed());
     let t = Instant::now();
     let image = sky.render(&gpu, Projection::Panorama, WIDTH, HEIGHT, &builtins, &material).expect("f64 render");

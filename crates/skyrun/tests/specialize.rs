@@ -10,7 +10,6 @@ mod common;
 
 use skyref::{FreemanParams, Projection, Scene};
 use skyrun::{SkyBuiltins, SkyShader, SubPasses, freeman_material};
-use std::collections::HashMap;
 
 const WIDTH: u32 = 64;
 const HEIGHT: u32 = 32;
@@ -46,8 +45,11 @@ fn baked_and_override_modules_render_as_the_generic_one() {
     };
 
     // Baked at the defaults: every uniform folded into the module.
-    let baked_lowered =
-        gdsky_naga::lower_with(&front, &gdsky_naga::reflect::defaults_as_set(shader)).expect("the baked sky lowers");
+    let baked_lowered = gdsky_naga::lower(
+        &front,
+        &gdsky_naga::LowerOptions { baked: gdshader::values::defaults_as_set(shader), ..Default::default() },
+    )
+    .expect("the baked sky lowers");
     assert!(baked_lowered.uniforms.is_empty(), "every uniform is baked");
     let baked_wgsl = gdsky_naga::to_wgsl(&baked_lowered).expect("WGSL");
     assert!(!baked_wgsl.contains("var<uniform> material"), "no material block is left:\n{baked_wgsl}");
@@ -64,7 +66,8 @@ fn baked_and_override_modules_render_as_the_generic_one() {
     // module with the same values in its material block.
     let names = ["sun_intensity", "mie_g_forward", "view_samples"].map(String::from);
     let over_lowered =
-        gdsky_naga::lower_with_overrides(&front, &HashMap::new(), &names).expect("the override sky lowers");
+        gdsky_naga::lower(&front, &gdsky_naga::LowerOptions { overrides: names.to_vec(), ..Default::default() })
+            .expect("the override sky lowers");
     for n in &names {
         assert!(!over_lowered.uniforms.contains_key(n), "`{n}` left the uniforms");
     }

@@ -15,7 +15,7 @@ fn render(gpu: &Gpu, source: &str) -> Vec<[f32; 4]> {
     let front =
         gdshader::check_source("sub_passes.gdshader", source.as_bytes().to_vec(), None, &mut gdshader::FsLoader);
     assert!(!front.has_errors(), "{:?}", front.diagnostics);
-    let lowered = gdsky_naga::lower(&front).expect("lowers");
+    let lowered = gdsky_naga::lower(&front, &gdsky_naga::LowerOptions::default()).expect("lowers");
     let wgsl = gdsky_naga::to_wgsl(&lowered).expect("WGSL");
     let shader = SkyShader::new(gpu, &wgsl, SubPasses::of(&front)).expect("compiles");
     let builtins = SkyBuiltins::from_scene(&skyref::Scene::default(), 64, 32);

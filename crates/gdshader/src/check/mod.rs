@@ -59,6 +59,24 @@ impl CheckedShader {
     pub fn struct_names(&self) -> Vec<String> {
         self.structs.iter().map(|s| s.name.clone()).collect()
     }
+
+    /// The names a texture can be given under (`--texture NAME=PATH`, a scene's `[textures]`, a
+    /// runtime's texture by name): each material sampler uniform's, and `name_i` for element i
+    /// of a sampler array, in declaration order (the names of the reflection's
+    /// `bindings.textures`).
+    pub fn texture_names(&self) -> Vec<String> {
+        self.uniforms
+            .iter()
+            .filter(|u| !u.global)
+            .flat_map(|u| match &u.ty {
+                Type::Sampler(..) => vec![u.name.clone()],
+                Type::Array(element, n) if matches!(**element, Type::Sampler(..)) => {
+                    (0..*n).map(|i| format!("{}_{i}", u.name)).collect()
+                }
+                _ => Vec::new(),
+            })
+            .collect()
+    }
 }
 
 /// A uniform as the checker sees it.

@@ -57,6 +57,11 @@ impl SourceDb {
         self.paths.get(file.0).and_then(|p| p.as_deref())
     }
 
+    /// The paths of every file read from disk (the shader and its includes).
+    pub fn paths(&self) -> impl Iterator<Item = &std::path::Path> {
+        self.paths.iter().filter_map(|p| p.as_deref())
+    }
+
     /// Number of files held.
     pub fn len(&self) -> usize {
         self.paths.len()
@@ -246,4 +251,14 @@ pub fn render_json(db: &SourceDb, diagnostics: &[Diagnostic]) -> String {
         out.push('\n');
     }
     out
+}
+
+/// The closest of `candidates` to `name`, when it is close enough to be a typo.
+pub fn did_you_mean<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
+    candidates
+        .into_iter()
+        .map(|c| (strsim::osa_distance(name, c), c))
+        .filter(|(d, c)| *d <= (c.len().max(name.len()) / 3).max(1))
+        .min_by_key(|(d, _)| *d)
+        .map(|(_, c)| c)
 }

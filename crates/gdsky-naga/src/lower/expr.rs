@@ -412,7 +412,7 @@ impl<'l, 'a> FnCtx<'l, 'a> {
             return self.lw.uniform_value(b, loaded, &slot.ty, sp).map(Val::Value);
         }
         let ty = self.type_of(e)?;
-        crate::wrapper::read_builtin(self.lw, b, &id.name, &ty, id.span)
+        super::wrapper::read_builtin(self.lw, b, &id.name, &ty, id.span)
             .or_else(|| self.unsupported(e, &format!("`{}`", id.name)))
     }
 

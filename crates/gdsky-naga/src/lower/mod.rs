@@ -45,15 +45,18 @@
 
 mod builder;
 mod calls;
+mod entry;
 mod expr;
 mod fold;
 mod stmt;
+pub(crate) mod wrapper;
 
 pub(crate) use builder::FnBuilder;
+pub(crate) use entry::LowerError;
+pub use entry::{Debanding, LowerOptions, Lowered, Precision, SkyCoords, lower};
 pub(crate) use expr::Val;
+pub use wrapper::depth_convention;
 
-use crate::LowerError;
-use crate::wrapper::Builtins;
 use gdshader::CheckedShader;
 use gdshader::check::consteval::ConstValue;
 use gdshader::check::types::{Scalar as GdScalar, Type as GdType};
@@ -65,6 +68,7 @@ use naga::{
 };
 use std::collections::HashMap;
 use std::num::NonZeroU32;
+use wrapper::Builtins;
 
 /// The bind group of the material uniform block and its textures.
 pub const MATERIAL_GROUP: u32 = 1;
@@ -147,10 +151,8 @@ pub(crate) struct Lowerer<'a> {
     pub errors: Vec<LowerError>,
     /// Uniforms baked into constants (`--set`), with their values.
     baked: HashMap<String, ConstValue>,
-    /// Whether the wrapper adds Godot's debanding noise (for `use_debanding` shaders).
-    pub debanding: crate::Debanding,
-    /// How the wrapper computes SKY_COORDS.
-    pub sky_coords: crate::SkyCoords,
+    /// What the module is lowered for (the wrapper's debanding, SKY_COORDS and depth).
+    pub options: &'a LowerOptions,
 }
 
 pub(crate) fn span(s: ast::Span) -> Span {
@@ -159,7 +161,7 @@ pub(crate) fn span(s: ast::Span) -> Span {
 }
 
 impl<'a> Lowerer<'a> {
-    pub fn new(shader: &'a CheckedShader, baked: HashMap<String, ConstValue>) -> Self {
+    pub fn new(shader: &'a CheckedShader, baked: HashMap<String, ConstValue>, options: &'a LowerOptions) -> Self {
         Lowerer {
             shader,
             module: Module::default(),
@@ -175,8 +177,7 @@ impl<'a> Lowerer<'a> {
             sky_function: None,
             errors: Vec::new(),
             baked,
-            debanding: crate::Debanding::None,
-            sky_coords: crate::SkyCoords::Exact,
+            options,
         }
     }
 
@@ -201,7 +202,7 @@ impl<'a> Lowerer<'a> {
                 _ => {}
             }
         }
-        crate::wrapper::entry_points(self);
+        wrapper::entry_points(self);
     }
 
     fn structs(&mut self) {
@@ -441,7 +442,7 @@ impl<'a> Lowerer<'a> {
 
     /// Declares one of the sky's own textures (RADIANCE, HALF_RES_COLOR, QUARTER_RES_COLOR).
     pub fn sky_texture(&mut self, name: &str, kind: gdshader::check::types::SamplerKind, binding: u32) {
-        self.texture_at(name, kind, GdScalar::Float, crate::wrapper::SKY_TEXTURE_GROUP, binding);
+        self.texture_at(name, kind, GdScalar::Float, wrapper::SKY_TEXTURE_GROUP, binding);
     }
 
     /// The naga texture and sampler types of a sampler of `kind` holding `scalar`s.

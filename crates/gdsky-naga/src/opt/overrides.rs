@@ -1,26 +1,31 @@
 //! `--override NAME`: a uniform as a pipeline-overridable constant (WGSL `override`).
 
-use crate::Lowered;
+use crate::UniformSlot;
 use gdshader::CheckedShader;
 use gdshader::check::consteval::ConstValue;
 use gdshader::check::types::{Scalar as GdScalar, Type as GdType};
 use naga::{Expression, Literal, Override, Span, TypeInner};
+use std::collections::HashMap;
 
 /// Turns each uniform of `names` into a module override, `@id(k)` in the order given, with the
 /// uniform's default (its zero when it has none) as the override's default: every load of the
 /// uniform's member of the material block becomes the override's value, and the uniform leaves
-/// `lowered.uniforms` (its bytes stay in the block, unread, so the block's layout does not
+/// `uniforms` (its bytes stay in the block, unread, so the block's layout does not
 /// depend on which uniforms are overridden). A `bool` travels as a `u32` override (0 or 1), as
 /// it does in the block. `names` must name scalar material uniforms (the caller checks).
-pub fn apply(lowered: &mut Lowered, shader: &CheckedShader, names: &[String]) {
+pub fn apply(
+    module: &mut naga::Module,
+    uniforms: &mut HashMap<String, UniformSlot>,
+    shader: &CheckedShader,
+    names: &[String],
+) {
     for (id, name) in names.iter().enumerate() {
-        let Some(slot) = lowered.uniforms.get(name).cloned() else {
+        let Some(slot) = uniforms.get(name).cloned() else {
             continue;
         };
         let Some(u) = shader.uniforms.iter().find(|u| &u.name == name) else {
             continue;
         };
-        let module = &mut lowered.module;
         let TypeInner::Struct { members, .. } = &module.types[module.global_variables[slot.block].ty].inner else {
             continue;
         };
@@ -63,6 +68,6 @@ pub fn apply(lowered: &mut Lowered, shader: &CheckedShader, names: &[String]) {
             // An override is never emitted (naga's validator counts it in scope from the start).
             super::uses::split_emits(&mut f.body, &loads.into_iter().collect());
         }
-        lowered.uniforms.remove(name);
+        uniforms.remove(name);
     }
 }

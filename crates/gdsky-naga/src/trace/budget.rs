@@ -18,8 +18,9 @@
 //! Render the canary module with the same uniforms as the shader's own and count pixels with
 //! alpha [`BUDGET_SPENT`]; the colour is the shader's.
 
+use crate::Lowered;
+use crate::valid::{validation_diagnostic, validator_for};
 use crate::widen::graft::Grafter;
-use crate::{Lowered, validation_diagnostic, validator_for};
 use gdshader::{Diagnostic, FrontendOutput};
 use naga::{
     BinaryOperator as Bo, Block, Expression as E, Function, Handle, Literal, ScalarKind, ShaderStage, Span, Statement,
@@ -71,6 +72,7 @@ pub fn loop_budget(front: &FrontendOutput, lowered: &Lowered) -> Result<Lowered,
         uniforms: lowered.uniforms.clone(),
         material_size: lowered.material_size,
         textures: lowered.textures.clone(),
+        options: lowered.options.clone(),
     })
 }
 

@@ -62,7 +62,8 @@ mod report;
 pub use budget::{BUDGET_LEFT, BUDGET_SPENT, loop_budget};
 pub use report::{NonfiniteReport, PLACE_COLOURS, Place};
 
-use crate::{Lowered, validation_diagnostic, validator_for};
+use crate::Lowered;
+use crate::valid::{validation_diagnostic, validator_for};
 use gdshader::parse::ast;
 use gdshader::{Diagnostic, FrontendOutput};
 use naga::{
@@ -173,6 +174,7 @@ pub fn instrument(front: &FrontendOutput, lowered: &Lowered) -> Result<Traced, V
         uniforms: lowered.uniforms.clone(),
         material_size: lowered.material_size,
         textures: lowered.textures.clone(),
+        options: lowered.options.clone(),
     };
     Ok(Traced { lowered, sites })
 }
@@ -392,7 +394,7 @@ pub(crate) fn render_pass(module: &naga::Module) -> Option<(Handle<GlobalVariabl
             && g.name.as_deref() == Some("sky_builtins"))
         .then_some(h)
     });
-    let member = crate::wrapper::BUILTIN_FIELDS.iter().position(|f| *f == "render_pass").map(|i| i as u32);
+    let member = crate::lower::wrapper::BUILTIN_FIELDS.iter().position(|f| *f == "render_pass").map(|i| i as u32);
     builtins.zip(member)
 }
 
@@ -450,8 +452,8 @@ impl PassRefs {
         PassRefs {
             globals: ex.append(E::GlobalVariable(globals), sp),
             member,
-            half: ex.append(E::Literal(Literal::U32(crate::wrapper::PASS_HALF)), sp),
-            quarter: ex.append(E::Literal(Literal::U32(crate::wrapper::PASS_QUARTER)), sp),
+            half: ex.append(E::Literal(Literal::U32(crate::lower::wrapper::PASS_HALF)), sp),
+            quarter: ex.append(E::Literal(Literal::U32(crate::lower::wrapper::PASS_QUARTER)), sp),
         }
     }
 

@@ -19,7 +19,7 @@ void sky() {
 #[test]
 fn instrumented_freeman_validates_and_writes() {
     let front = front("freeman_sky.gdshader", FREEMAN);
-    let lowered = crate::lower(&front).expect("lowers");
+    let lowered = crate::lower(&front, &crate::LowerOptions::default()).expect("lowers");
     let traced = instrument(&front, &lowered).expect("instrumented module validates");
     assert!(traced.sites.len() > 20, "{} sites", traced.sites.len());
     for (i, s) in traced.sites.iter().enumerate() {
@@ -41,11 +41,11 @@ fn instrumented_freeman_validates_and_writes() {
 #[test]
 fn the_module_given_is_unchanged() {
     let front = front("freeman_sky.gdshader", FREEMAN);
-    let lowered = crate::lower(&front).expect("lowers");
+    let lowered = crate::lower(&front, &crate::LowerOptions::default()).expect("lowers");
     let before = crate::to_wgsl(&lowered).expect("WGSL");
     let traced = instrument(&front, &lowered).expect("instruments");
     assert_eq!(crate::to_wgsl(&lowered).expect("WGSL"), before);
-    let again = crate::lower(&front).expect("lowers");
+    let again = crate::lower(&front, &crate::LowerOptions::default()).expect("lowers");
     assert_eq!(crate::to_wgsl(&again).expect("WGSL"), before, "lowering is deterministic");
     assert!(!before.contains(SITE_REGISTER));
     assert_ne!(crate::to_wgsl(&traced.lowered).expect("WGSL"), before);
@@ -54,7 +54,7 @@ fn the_module_given_is_unchanged() {
 #[test]
 fn planted_sqrt_is_a_site_and_wrapper_code_is_not() {
     let front = front("planted.gdshader", PLANTED);
-    let lowered = crate::lower(&front).expect("lowers");
+    let lowered = crate::lower(&front, &crate::LowerOptions::default()).expect("lowers");
     let traced = instrument(&front, &lowered).expect("instruments");
     let names: Vec<(String, &str, &str)> =
         traced.sites.iter().map(|s| (s.location(), s.snippet.as_str(), s.kind.as_str())).collect();
@@ -72,7 +72,7 @@ fn planted_sqrt_is_a_site_and_wrapper_code_is_not() {
 fn a_macro_site_is_its_invocation() {
     let src = "shader_type sky;\n#define ROOT(v) sqrt(v)\nvoid sky() {\n    COLOR = vec3(ROOT(EYEDIR.y));\n}\n";
     let front = front("macro.gdshader", src);
-    let lowered = crate::lower(&front).expect("lowers");
+    let lowered = crate::lower(&front, &crate::LowerOptions::default()).expect("lowers");
     let traced = instrument(&front, &lowered).expect("instruments");
     let sqrt: Vec<&Site> = traced.sites.iter().filter(|s| s.kind == "sqrt").collect();
     assert_eq!(sqrt.len(), 1, "{:#?}", traced.sites);
@@ -83,7 +83,8 @@ fn a_macro_site_is_its_invocation() {
 #[test]
 fn alpha_decodes_to_sites() {
     let front = front("planted.gdshader", PLANTED);
-    let traced = instrument(&front, &crate::lower(&front).expect("lowers")).expect("instruments");
+    let traced = instrument(&front, &crate::lower(&front, &crate::LowerOptions::default()).expect("lowers"))
+        .expect("instruments");
     assert_eq!(traced.site_of_alpha(0.0), None);
     assert_eq!(traced.site_of_alpha(2.0).map(|s| s.kind.as_str()), Some("sqrt"));
     assert_eq!(traced.site_of_alpha(1.5), None);

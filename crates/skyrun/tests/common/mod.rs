@@ -9,7 +9,7 @@ use std::path::Path;
 pub fn converted_freeman() -> (gdshader::FrontendOutput, gdsky_naga::Lowered, String) {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/freeman_sky.gdshader");
     let front = gdshader::check_file(&path).expect("fixture readable");
-    let lowered = gdsky_naga::lower(&front).expect("the Freeman sky lowers");
+    let lowered = gdsky_naga::lower(&front, &gdsky_naga::LowerOptions::default()).expect("the Freeman sky lowers");
     let wgsl = gdsky_naga::to_wgsl(&lowered).expect("WGSL");
     (front, lowered, wgsl)
 }

@@ -448,11 +448,11 @@ fn gradient_and_curve_textures_are_read_with_their_resources() {
     let settings = material.settings(shader).unwrap();
     let ramps = &settings.generated_ramps;
     assert_eq!(ramps.len(), 2, "{ramps:?}");
-    let crate::noise::RampTexture::Gradient2D(disc) = &ramps[0].texture else { panic!("{:?}", ramps[0]) };
+    let crate::generated::RampTexture::Gradient2D(disc) = &ramps[0].texture else { panic!("{:?}", ramps[0]) };
     assert_eq!((disc.width, disc.height, disc.use_hdr, disc.fill, disc.repeat), (32, 64, true, 1, 2));
     assert_eq!((disc.fill_from, disc.fill_to), ([0.5, 0.5], [1.0, 0.5]));
     assert_eq!(disc.gradient.as_ref().unwrap().offsets, [0.0, 0.6]);
-    let crate::noise::RampTexture::Curve(ct) = &ramps[1].texture else { panic!("{:?}", ramps[1]) };
+    let crate::generated::RampTexture::Curve(ct) = &ramps[1].texture else { panic!("{:?}", ramps[1]) };
     assert_eq!(ct.texture_mode, 1);
     let curve = ct.curve.as_ref().unwrap();
     assert_eq!((curve.min_value, curve.max_value, curve.bake_resolution), (-1.0, 2.0, 64));
@@ -460,7 +460,7 @@ fn gradient_and_curve_textures_are_read_with_their_resources() {
         (curve.points[0].right_tangent, curve.points[1].left_tangent, curve.points[1].right_mode),
         (-1.5, 0.25, 1)
     );
-    assert_eq!(ramps[0].texture.image().unwrap().format, crate::noise::RampFormat::Rgbaf);
+    assert_eq!(ramps[0].texture.image().unwrap().format, crate::generated::RampFormat::Rgbaf);
     assert!(ramps.iter().all(|r| r.texture.generate().is_ok()));
     // A tangent mode Godot does not have: located at the value.
     let bad = load_sky_material(&dir.join("bad_curve.tres")).unwrap();
@@ -470,7 +470,7 @@ fn gradient_and_curve_textures_are_read_with_their_resources() {
 }
 
 fn fixture(path: &str) -> std::path::PathBuf {
-    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/godot_project").join(path)
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/godot_project").join(path)
 }
 
 #[test]

@@ -13,7 +13,7 @@
 //! * `vs_main` (a fullscreen triangle), and `fs_panorama`, `fs_camera`, `fs_cubemap`, which differ
 //!   only in how a pixel becomes EYEDIR.
 
-use crate::lower::{FnBuilder, Lowerer, Val, span};
+use super::{FnBuilder, Lowerer, Val, span};
 use gdshader::check::types::Type as GdType;
 use gdshader::parse::ast;
 use naga::{
@@ -21,7 +21,7 @@ use naga::{
     FunctionResult, GlobalVariable, Handle, Literal, MathFunction as Mf, MemoryDecorations, ResourceBinding,
     ShaderStage, Span, Statement, Type, TypeInner, VectorSize,
 };
-use skycore::Projection;
+use skycore::{DepthConvention, Projection};
 use std::collections::HashMap;
 use std::f64::consts::PI;
 
@@ -71,16 +71,36 @@ pub const PASS_CUBEMAP: u32 = 3;
 /// docs/godot.md, "Debanding".
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Debanding {
-    /// No noise: the shader's linear COLOR, as before (the default).
-    #[default]
+    /// No noise: the shader's linear COLOR (for error measurement, where the dither is noise).
     None,
-    /// Godot's interleaved-gradient-noise dither, added where Godot adds it.
+    /// Godot's interleaved-gradient-noise dither, added where Godot adds it: for a shader that
+    /// declares `use_debanding` (the default, as in Godot).
+    #[default]
     Godot,
+}
+
+impl Debanding {
+    /// The names `--debanding` takes.
+    pub const NAMES: [&'static str; 2] = ["none", "godot"];
+}
+
+impl std::str::FromStr for Debanding {
+    type Err = String;
+
+    /// `none` or `godot`.
+    fn from_str(name: &str) -> Result<Self, String> {
+        match name {
+            "none" => Ok(Debanding::None),
+            "godot" => Ok(Debanding::Godot),
+            _ => Err(format!("`{name}` is no debanding; expected one of: none, godot")),
+        }
+    }
 }
 
 /// How the wrapper computes SKY_COORDS from EYEDIR.
 ///
-/// Godot 4.3–4.5 use exact `atan2`/`acos` (the design's reference, and the default). Godot 4.6
+/// Godot 4.3–4.5 use exact `atan2`/`acos`. Godot 4.6, the newest Godot the oracle runs and so the
+/// default,
 /// (both renderers' sky.glsl, including the Compatibility renderer the oracle runs) uses
 /// polynomial approximations, Eberly's (`acos_approx`: (π/2 − 0.156583·|x|)·√(1 − |x|), mirrored
 /// for x < 0; `atan2_approx`: a·(1 + s·(−0.301895 + 0.0872929·s)) with a = min/max of |x|, |y|,
@@ -90,11 +110,29 @@ pub enum Debanding {
 /// Godot 4.6's values.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum SkyCoords {
-    /// `atan2(d.x, −d.z) / 2π` wrapped to [0, 1), `acos(d.y) / π`.
-    #[default]
+    /// `atan2(d.x, −d.z) / 2π` wrapped to [0, 1), `acos(d.y) / π`, as Godot 4.3–4.5.
     Exact,
-    /// Godot 4.6's `atan2_approx` and `acos_approx`, in its order of operations.
+    /// Godot 4.6's `atan2_approx` and `acos_approx`, in its order of operations (the default).
+    #[default]
     Godot46,
+}
+
+impl SkyCoords {
+    /// The names `--sky-coords` takes.
+    pub const NAMES: [&'static str; 2] = ["exact", "godot46"];
+}
+
+impl std::str::FromStr for SkyCoords {
+    type Err = String;
+
+    /// `exact` or `godot46`.
+    fn from_str(name: &str) -> Result<Self, String> {
+        match name {
+            "exact" => Ok(SkyCoords::Exact),
+            "godot46" => Ok(SkyCoords::Godot46),
+            _ => Err(format!("`{name}` is no SKY_COORDS mode; expected one of: exact, godot46")),
+        }
+    }
 }
 
 /// The per-pixel built-ins, which live in private globals.
@@ -266,43 +304,19 @@ pub(crate) fn entry_points(lw: &mut Lowerer) {
     }
 }
 
-/// The far plane's depth with standard Z (near 0, far 1; depth test `LessEqual`, clear 1).
-pub const FAR_PLANE_STANDARD: f32 = 1.0;
-/// The far plane's depth with reversed Z (near 1, far 0; depth test `GreaterEqual`, clear 0).
-pub const FAR_PLANE_REVERSED: f32 = 0.0;
-
-/// The depth `vs_main` gives the sky (its position's z; w is 1): the far plane of the module's
-/// depth convention. `None` when the module has no `vs_main` of the wrapper's form (a module
-/// not built by gdsky, or WGSL from before the sky moved to the far plane, which drew it at 0).
-pub fn far_plane_depth(module: &naga::Module) -> Option<f32> {
+/// The depth convention of a module's `vs_main` (where it puts the sky: its position's z, with w
+/// 1). `None` when the module has no `vs_main` of the wrapper's form (a module not built by
+/// gdsky, or WGSL from before the sky moved to the far plane, which drew it at 0).
+pub fn depth_convention(module: &naga::Module) -> Option<DepthConvention> {
     let (function, z) = vertex_depth(module)?;
     match function.expressions[z] {
-        E::Literal(Literal::F32(v)) => Some(v),
+        E::Literal(Literal::F32(v)) => {
+            [DepthConvention::Standard, DepthConvention::Reversed].into_iter().find(|c| c.far_plane() == v)
+        }
         _ => None,
     }
 }
 
-/// Moves the sky of a lowered module to `depth` (its far plane: [`FAR_PLANE_STANDARD`] or
-/// [`FAR_PLANE_REVERSED`]); `gdsky convert --reversed-z`. Only a literal changes value, so the
-/// module's validation info stays valid. Returns false when the module has no wrapper `vs_main`.
-pub fn set_far_plane_depth(module: &mut naga::Module, depth: f32) -> bool {
-    let Some(index) = module.entry_points.iter().position(|e| e.name == "vs_main") else {
-        return false;
-    };
-    let Some((_, z)) = vertex_depth(module) else {
-        return false;
-    };
-    let expressions = &mut module.entry_points[index].function.expressions;
-    match &mut expressions[z] {
-        E::Literal(Literal::F32(v)) => {
-            *v = depth;
-            true
-        }
-        _ => false,
-    }
-}
-
-/// `vs_main` and the z component of the position it returns.
 fn vertex_depth(module: &naga::Module) -> Option<(&naga::Function, Handle<E>)> {
     let entry = module.entry_points.iter().find(|e| e.name == "vs_main" && e.stage == ShaderStage::Vertex)?;
     let function = &entry.function;
@@ -345,8 +359,7 @@ fn vertex(lw: &mut Lowerer) {
     let one = b.expr(E::Literal(Literal::F32(1.0)), sp);
     // The sky lies on the far plane (w = 1, so this is the depth), as Godot draws it behind
     // its geometry: a depth test against what was drawn first skips every covered pixel.
-    // Standard Z here; `set_far_plane_depth` switches the module to reversed Z.
-    let far = b.expr(E::Literal(Literal::F32(FAR_PLANE_STANDARD)), sp);
+    let far = b.expr(E::Literal(Literal::F32(lw.options.depth.far_plane())), sp);
     let x2 = b.expr(E::Binary { op: Bo::Multiply, left: xf, right: two }, sp);
     let y2 = b.expr(E::Binary { op: Bo::Multiply, left: yf, right: two }, sp);
     let x = b.expr(E::Binary { op: Bo::Subtract, left: x2, right: one }, sp);
@@ -444,7 +457,7 @@ fn fragment(lw: &mut Lowerer, global: Handle<GlobalVariable>, projection: Projec
         let dy = b.expr(E::AccessIndex { base: dir, index: 1 }, sp);
         let dz = b.expr(E::AccessIndex { base: dir, index: 2 }, sp);
         let ndz = b.expr(E::Unary { op: naga::UnaryOperator::Negate, expr: dz }, sp);
-        let (su, sv) = match lw.sky_coords {
+        let (su, sv) = match lw.options.sky_coords {
             SkyCoords::Exact => {
                 let a = math(&mut b, Mf::Atan2, &[dx, ndz]);
                 let tau = f(&mut b, 2.0 * PI);
@@ -535,7 +548,7 @@ fn fragment(lw: &mut Lowerer, global: Handle<GlobalVariable>, projection: Projec
     }
     let lum = load_field(&mut b, global, &[LUMINANCE], sp);
     let mut rgb = bin(&mut b, Bo::Multiply, rgb, lum);
-    if lw.debanding == Debanding::Godot && lw.shader.render_modes.iter().any(|m| m == "use_debanding") {
+    if lw.options.debanding == Debanding::Godot && lw.shader.render_modes.iter().any(|m| m == "use_debanding") {
         // Godot's last step: frag_color.rgb += interleaved_gradient_noise(gl_FragCoord.xy) *
         // luminance_multiplier, with the noise's operations in its order.
         let magic = [f(&mut b, 0.06711056), f(&mut b, 0.00583715)];

@@ -65,12 +65,12 @@ impl RampImage {
     /// cannot be filtered in core WebGPU, and a sky samples these with `texture()`; half
     /// precision (relative error ≤ 2⁻¹¹) is the price. What a shader sees of the missing
     /// channels is what GL gives: `RF` → (r, 0, 0, 1), `RGBF` → (r, g, b, 1).
-    pub fn to_texture(&self) -> Result<skyrun::TextureData, NoiseError> {
+    pub fn to_texture(&self) -> Result<skycore::TextureData, NoiseError> {
         let floats = |bytes: &[u8]| -> Vec<f32> {
             bytes.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect()
         };
         let (format, data) = match self.format {
-            RampFormat::Rgba8 => (skyrun::TexelFormat::Rgba8Unorm, self.data.clone()),
+            RampFormat::Rgba8 => (skycore::TexelFormat::Rgba8Unorm, self.data.clone()),
             other => {
                 let v = floats(&self.data);
                 let rgba: Vec<f32> = match other {
@@ -79,10 +79,10 @@ impl RampImage {
                     _ => v.iter().flat_map(|&r| [r, 0.0, 0.0, 1.0]).collect(),
                 };
                 let bytes = rgba.iter().flat_map(|&f| f16_bits(f).to_le_bytes()).collect();
-                (skyrun::TexelFormat::Rgba16Float, bytes)
+                (skycore::TexelFormat::Rgba16Float, bytes)
             }
         };
-        skyrun::TextureData::new(self.width, self.height, format, data).map_err(NoiseError::Texture)
+        skycore::TextureData::new(self.width, self.height, format, data).map_err(NoiseError::Texture)
     }
 }
 
@@ -626,7 +626,7 @@ impl RampTexture {
     }
 
     /// The texture a shader samples ([`RampImage::to_texture`]).
-    pub fn generate(&self) -> Result<skyrun::TextureData, NoiseError> {
+    pub fn generate(&self) -> Result<skycore::TextureData, NoiseError> {
         self.image()?.to_texture()
     }
 }

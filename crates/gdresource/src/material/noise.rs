@@ -1,11 +1,11 @@
 //! A `NoiseTexture2D` or `NoiseTexture3D` section (with its `FastNoiseLite` and `Gradient`)
-//! mapped onto [`crate::noise::NoiseTexture2D`] or [`crate::noise::NoiseTexture3D`]: property by property, Godot's names, every value checked
+//! mapped onto [`crate::generated::NoiseTexture2D`] or [`crate::generated::NoiseTexture3D`]: property by property, Godot's names, every value checked
 //! for its kind where it is written. Properties gdsky does not use (`resource_name`, …) are
 //! skipped, as Godot's editor-only ones are.
 
-use super::codes;
-use super::text::{Entry, Section, Value, ValueKind};
-use crate::noise::{FastNoiseLite, Gradient, NoiseTexture2D, NoiseTexture3D};
+use crate::codes;
+use crate::generated::{FastNoiseLite, Gradient, NoiseTexture2D, NoiseTexture3D};
+use crate::text::{Entry, Section, Value, ValueKind};
 use gdshader::diag::{Diagnostic, FileId};
 
 /// A property's value of the wrong kind, located.

@@ -1,12 +1,38 @@
 //! From a `.tres` or `.tscn` to a sky's `ShaderMaterial`: its shader, its parameter values and
 //! its textures, every error located in the file that holds the mistake.
 
-use super::codes;
-use super::text::{self, Document, Section, Span, Value, ValueKind};
-use crate::scene::{TextureSetting, UniformSetting};
+mod noise;
+mod ramp;
+
+use crate::codes;
+use crate::text::{self, Document, Section, Span, Value, ValueKind};
 use gdshader::check::types::{Scalar, Type};
 use gdshader::diag::{Diagnostic, FileId, SourceDb, render_human};
 use std::path::{Path, PathBuf};
+
+/// A uniform value a file fixes (a material's `shader_parameter/*`, a scene file's `[uniforms]`):
+/// its text in `--set` syntax and where it is in the file.
+#[derive(Clone, Debug, PartialEq)]
+pub struct UniformSetting {
+    /// The uniform's name.
+    pub name: String,
+    /// The value in `--set` syntax (`16`, `0.1,0.1,0.1`, `true`).
+    pub text: String,
+    /// Byte range of the value in its file.
+    pub span: std::ops::Range<usize>,
+}
+
+/// A texture a file gives a sampler uniform (a material's image texture, a scene file's
+/// `[textures]`, as `--texture NAME=PATH`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TextureSetting {
+    /// The sampler uniform's name (`name_i` for element i of a sampler array).
+    pub name: String,
+    /// The image, resolved against the file's folder (a material's `res://` against the project).
+    pub path: PathBuf,
+    /// Byte range of the path in its file.
+    pub span: std::ops::Range<usize>,
+}
 
 /// Why a material was not loaded; the message is rendered (located diagnostics).
 #[derive(Debug)]
@@ -135,8 +161,8 @@ impl std::fmt::Debug for SkyMaterial {
 pub struct GeneratedTexture {
     /// The sampler uniform.
     pub name: String,
-    /// What to generate ([`crate::noise::NoiseTexture2D::generate`]).
-    pub texture: crate::noise::NoiseTexture2D,
+    /// What to generate ([`crate::generated::NoiseTexture2D::generate`]).
+    pub texture: crate::generated::NoiseTexture2D,
     /// Where the material file gives it.
     pub span: Span,
 }
@@ -147,8 +173,8 @@ pub struct GeneratedTexture {
 pub struct GeneratedRamp {
     /// The sampler uniform.
     pub name: String,
-    /// What to generate ([`crate::noise::RampTexture::generate`]).
-    pub texture: crate::noise::RampTexture,
+    /// What to generate ([`crate::generated::RampTexture::generate`]).
+    pub texture: crate::generated::RampTexture,
     /// Where the material file gives it.
     pub span: Span,
 }
@@ -158,8 +184,8 @@ pub struct GeneratedRamp {
 pub struct GeneratedVolume {
     /// The sampler uniform.
     pub name: String,
-    /// What to generate ([`crate::noise::NoiseTexture3D::image`], one image per slice).
-    pub texture: crate::noise::NoiseTexture3D,
+    /// What to generate ([`crate::generated::NoiseTexture3D::image`], one image per slice).
+    pub texture: crate::generated::NoiseTexture3D,
     /// Where the material file gives it.
     pub span: Span,
 }
@@ -712,10 +738,10 @@ impl SkyMaterial {
     /// Checks the material's shader with Godot's rules (a `.gdshader` file is read; an embedded
     /// shader is checked under its display name, relative `#include`s from the material's
     /// folder). An error when the shader file cannot be read.
-    pub fn check_shader(&self) -> std::io::Result<crate::FrontendOutput> {
+    pub fn check_shader(&self) -> std::io::Result<gdshader::FrontendOutput> {
         match &self.shader {
-            MaterialShader::File(path) => crate::check_file(path),
-            MaterialShader::Embedded { name, code } => Ok(crate::check_source(
+            MaterialShader::File(path) => gdshader::check_file(path),
+            MaterialShader::Embedded { name, code } => Ok(gdshader::check_source(
                 name,
                 code.clone().into_bytes(),
                 Some(self.path.clone()),
@@ -732,7 +758,7 @@ impl SkyMaterial {
         let mut out = MaterialSettings::default();
         let mut errors = Vec::new();
         let mut warnings = Vec::new();
-        let samplers = crate::scene::texture_names(shader);
+        let samplers = shader.texture_names();
         for p in &self.parameters {
             let Some(u) = shader.uniforms.iter().find(|u| u.name == p.name) else {
                 if !samplers.contains(&p.name) {
@@ -770,7 +796,7 @@ impl SkyMaterial {
                     "give it a texture: ExtResource or SubResource".into(),
                 )),
                 ParameterValue::Value(v) => match set_text(v, &u.ty) {
-                    Ok(text) => match gdsky_naga::reflect::parse_value(&u.ty, &text) {
+                    Ok(text) => match gdshader::values::parse_value(&u.ty, &text) {
                         Ok(_) => out.uniforms.push(UniformSetting { name: p.name.clone(), text, span: p.span.clone() }),
                         Err(why) => errors.push(fail(why, format!("`{}` is a `{}`", p.name, u.type_name))),
                     },
@@ -789,7 +815,7 @@ impl SkyMaterial {
 }
 
 /// Adds a texture to `out`: an image by path, or a noise texture mapped onto
-/// [`crate::noise::NoiseTexture2D`] or [`crate::noise::NoiseTexture3D`] (an error located at
+/// [`crate::generated::NoiseTexture2D`] or [`crate::generated::NoiseTexture3D`] (an error located at
 /// the property that does not fit).
 fn push_texture(out: &mut MaterialSettings, name: &str, source: &TextureSource, span: Span) -> Result<(), Diagnostic> {
     match source {
@@ -797,15 +823,15 @@ fn push_texture(out: &mut MaterialSettings, name: &str, source: &TextureSource, 
             out.textures.push(TextureSetting { name: name.to_string(), path: path.clone(), span })
         }
         TextureSource::Ramp(r) => {
-            let texture = super::ramp::ramp_texture(r.file, &r.class, &r.texture, r.gradient.as_ref(), &r.curves)?;
+            let texture = ramp::ramp_texture(r.file, &r.class, &r.texture, r.gradient.as_ref(), &r.curves)?;
             out.generated_ramps.push(GeneratedRamp { name: name.to_string(), texture, span })
         }
         TextureSource::Noise(n) if n.volume => {
-            let texture = super::noise::noise_texture_3d(n.file, &n.texture, n.noise.as_ref(), n.color_ramp.as_ref())?;
+            let texture = noise::noise_texture_3d(n.file, &n.texture, n.noise.as_ref(), n.color_ramp.as_ref())?;
             out.generated_volumes.push(GeneratedVolume { name: name.to_string(), texture, span })
         }
         TextureSource::Noise(n) => {
-            let texture = super::noise::noise_texture(n.file, &n.texture, n.noise.as_ref(), n.color_ramp.as_ref())?;
+            let texture = noise::noise_texture(n.file, &n.texture, n.noise.as_ref(), n.color_ramp.as_ref())?;
             out.generated.push(GeneratedTexture { name: name.to_string(), texture, span })
         }
     }

@@ -1,13 +1,13 @@
 //! A `GradientTexture1D`, `GradientTexture2D` or `CurveTexture` section (with its `Gradient` or
-//! `Curve`) mapped onto [`crate::noise::RampTexture`], property by property with Godot's names,
+//! `Curve`) mapped onto [`crate::generated::RampTexture`], property by property with Godot's names,
 //! every value checked for its kind where it is written (the helpers of [`super::noise`]).
 
-use super::codes;
 use super::noise::{boolean, float, gradient, int, numbers, wrong};
-use super::text::{Entry, Section, ValueKind};
-use crate::noise::{
+use crate::codes;
+use crate::generated::{
     Curve, CurvePoint, CurveTexture, CurveXyzTexture, GradientTexture1D, GradientTexture2D, RampTexture,
 };
+use crate::text::{Entry, Section, ValueKind};
 use gdshader::diag::{Diagnostic, FileId};
 
 /// A `Vector2` property.

@@ -44,7 +44,7 @@
 //!
 //! ## How a shader sees it
 //!
-//! [`NoiseTexture2D::generate`] gives an [`skyrun::TexelFormat::Rgba8Unorm`] texture: an L8
+//! [`NoiseTexture2D::generate`] gives an [`skycore::TexelFormat::Rgba8Unorm`] texture: an L8
 //! code v becomes (v, v, v, 255), as Godot's renderers swizzle an L8 texture to (l, l, l, 1);
 //! an RGBA8 image is taken as is. Whether the shader decodes sRGB (`source_color`) is the
 //! binding's business, not the texture's.
@@ -332,7 +332,7 @@ pub enum NoiseError {
         message: String,
     },
     /// The generated texels did not make a texture (should not happen after the checks).
-    Texture(skyrun::TextureError),
+    Texture(skycore::TextureError),
 }
 
 impl fmt::Display for NoiseError {
@@ -647,9 +647,9 @@ impl NoiseTexture2D {
 
     /// The texture a shader samples: [`Self::image`] as RGBA8 unorm (L8 codes v as
     /// (v, v, v, 255)), level 0 only.
-    pub fn generate(&self) -> Result<skyrun::TextureData, NoiseError> {
+    pub fn generate(&self) -> Result<skycore::TextureData, NoiseError> {
         let image = self.image()?;
-        skyrun::TextureData::new(image.width, image.height, skyrun::TexelFormat::Rgba8Unorm, image.to_rgba8())
+        skycore::TextureData::new(image.width, image.height, skycore::TexelFormat::Rgba8Unorm, image.to_rgba8())
             .map_err(NoiseError::Texture)
     }
 }
@@ -729,7 +729,7 @@ mod tests {
         let t = texture(8, 4);
         let data = t.generate().expect("generates");
         let image = t.image().expect("generates");
-        assert_eq!(data.format(), skyrun::TexelFormat::Rgba8Unorm);
+        assert_eq!(data.format(), skycore::TexelFormat::Rgba8Unorm);
         assert_eq!(data.bytes()[..4], [image.data[0], image.data[0], image.data[0], 255]);
         let ramp = NoiseTexture2D { color_ramp: Some(Gradient::default()), ..t.clone() }.image().expect("generates");
         assert_eq!(ramp.format, NoiseFormat::Rgba8);

@@ -7,7 +7,7 @@
 //! unescaped, numbers read, constructors checked against Godot's variant types (name, argument
 //! count and kinds), so a typo in a file is reported where it is.
 
-use super::codes;
+use crate::codes;
 use gdshader::diag::{Diagnostic, FileId};
 use pest::Parser as _;
 use pest::iterators::Pair;
@@ -21,7 +21,7 @@ pub type Span = Range<usize>;
 pub const MAX_NESTING: usize = 64;
 
 #[derive(pest_derive::Parser)]
-#[grammar = "godot/grammar.pest"]
+#[grammar = "grammar.pest"]
 struct ResourceParser;
 
 /// A parsed `.tres` or `.tscn`: its sections in file order.
@@ -562,7 +562,7 @@ fn constructor(name: String, name_span: Span, args: Vec<Value>, span: Span) -> R
         let known: Vec<&str> = CONSTRUCTORS.iter().map(|(n, _)| *n).filter(|n| !n.starts_with("Pool")).collect();
         let mut e =
             ValueError::new(name_span, format!("`{name}` is not a type the resource format writes"), "unknown type");
-        e = match crate::scene::did_you_mean(&name, known.iter().copied()) {
+        e = match gdshader::diag::did_you_mean(&name, known.iter().copied()) {
             Some(m) => e.note(format!("did you mean `{m}`?")),
             None => e.note(format!("known: {}, Array[T](…), Dictionary[K, V](…), Object(Class, …)", known.join(", "))),
         };
