@@ -239,7 +239,8 @@ impl ConvertError {
         gdshader::diag::render_json(&self.db, &self.diagnostics)
     }
 
-    pub(crate) fn new(db: SourceDb, diagnostics: Vec<Diagnostic>) -> Self {
+    /// Diagnostics about the files in `db`.
+    pub fn new(db: SourceDb, diagnostics: Vec<Diagnostic>) -> Self {
         Self { db, diagnostics }
     }
 }

@@ -51,6 +51,8 @@ mod convert;
 mod rust_struct;
 
 #[cfg(feature = "engines")]
+pub mod engine;
+#[cfg(feature = "engines")]
 pub mod measure;
 #[cfg(feature = "engines")]
 pub mod scene;

@@ -28,10 +28,12 @@ enum Command {
     /// atomically. Exit status: 0 written, 1 the shader is invalid or cannot be translated, 2 a
     /// file cannot be read or written.
     Convert(cli::convert::ConvertArgs),
-    /// Render a sky shader headlessly on the best Vulkan adapter into an EXR.
+    /// Render a sky shader headlessly on the best Vulkan adapter into an EXR or a PNG.
     ///
     /// Converts FILE (default: the bundled Freeman sky), renders it on a GPU, or on lavapipe
-    /// (Mesa's CPU Vulkan driver) where there is none, and writes RGBA f32 linear radiance.
+    /// (Mesa's CPU Vulkan driver) where there is none, and writes RGBA f32 linear radiance
+    /// (`-o OUT.exr`) or a tone-mapped preview (`-o OUT.png`). Godot 4.6's look by default: a
+    /// shader's own `use_debanding`, Godot 4.6's SKY_COORDS (--debanding, --sky-coords).
     /// Uniforms keep the shader's defaults unless set with --set; --override NAME renders a scalar
     /// uniform as a pipeline constant of one module (the same image). The outputs are checked before
     /// anything is rendered: their directory must exist, and a directory, device, FIFO or socket
@@ -69,31 +71,33 @@ enum Command {
     /// the shader, a flag or Godot's compilation failed, 2 the oracle is not installed or a file
     /// cannot be read or written.
     Oracle(cli::oracle::OracleArgs),
-    /// Benchmark a Freeman-compatible sky: render time against error over a sweep of sample
-    /// counts.
+    /// Benchmark sky shaders: render time against error over a sweep of their quality knobs.
     ///
-    /// Sweeps view_samples {4,8,12,16,24,32,48,64} × sun_samples {2,4,8,16} (and any int uniform
-    /// given with --knob), renders each on the adapter (median wall time submit → idle of --runs
-    /// renders after a warm-up) and measures it against skyref's converged f64 image (1024/256
-    /// samples, cached on disk): mean, p99 and max relative error in linear radiance, mean error
-    /// after tone mapping. Writes DIR/bench.csv and DIR/bench.png (log-log, Pareto front
-    /// highlighted) and prints the front. A shader that is not Freeman-compatible is swept over
-    /// its quality knobs (int uniforms and int consts bounding loops) and measured against its
-    /// sampling truth: itself at converged knobs, in f64 (the convergence is printed). Exit
-    /// status: 0 written, 1 a flag is invalid, 2 no Vulkan adapter or an output cannot be written.
+    /// Each configuration is rendered on the adapter and timed (the median of --runs renders
+    /// after a warm-up; GPU timestamp queries around the passes where the adapter has them, else
+    /// wall time submit → idle; all configurations of all shaders in the same interleaved rounds)
+    /// and measured against a truth: mean, p99 and max relative error in linear radiance, mean
+    /// error after tone mapping. A Freeman-compatible shader (the Freeman sky's uniforms) sweeps
+    /// view_samples × sun_samples (and any --knob) against skyref's integrals of the model (about
+    /// 1e-7; cached on disk), and several of them share one chart. Any other shader sweeps its
+    /// quality knobs (hint_range int uniforms and int consts bounding loops) against its
+    /// sampling truth: itself at converged knobs, evaluated in f64 on the device (the
+    /// convergence is printed). Writes DIR/bench.csv and DIR/bench.png (log-log, Pareto fronts)
+    /// and prints the fronts. Exit status: 0 written, 1 a flag or the shader is invalid, 2 no
+    /// Vulkan adapter or an output cannot be written.
     Bench(cli::bench::BenchArgs),
-    /// Stress-test the numerical stability of a Freeman-compatible sky, in f32 on the adapter and
-    /// on the CPU, against skyref in f64.
+    /// Stress-test the numerical stability of a sky shader in f32 against f64.
     ///
-    /// Sweeps camera altitude (0.5 m … 100 km and above the atmosphere), sun elevation (−90° …
-    /// 90°, dense near 0°), a panorama and a narrow view of the horizon, and each uniform at the
-    /// ends of its hint_range; reports NaN/Inf counts and the worst relative errors with where they
-    /// occur, for the shader on the GPU (f32) and for skyref's own f32 on the CPU. Writes
-    /// DIR/stress.md, DIR/stress.csv and heatmaps; prints a `summary:` line. --quick runs a small
-    /// subset (for CI). Any other shader is measured against its own f64 evaluation over sun,
-    /// camera, TIME (to 1e6 s), views and hint-range ends, with a few-ulp sensitivity measure that
-    /// marks ill-conditioned pixels. Exit status: 0 report written, 1 a flag is invalid or --quick
-    /// found NaN/Inf at default uniforms, 2 no Vulkan adapter or an output cannot be written.
+    /// A Freeman-compatible shader sweeps camera altitude (0.5 m … 100 km and above the
+    /// atmosphere), sun elevation (−90° … 90°, dense near 0°), a panorama and a narrow view of
+    /// the horizon, and each uniform at the ends of its hint_range, on the adapter and with
+    /// skyref's own f32 on the CPU, against skyref in f64. Any other shader sweeps sun, camera,
+    /// TIME (to 1e6 s), views and hint-range ends against its own f64 evaluation on the device,
+    /// with a few-ulp sensitivity measure that marks ill-conditioned pixels. NaN and Inf are
+    /// traced to the source line that made them. Writes DIR/stress.md, DIR/stress.csv and
+    /// heatmaps; prints a `summary:` line. --quick runs a small subset (for CI). Exit status: 0
+    /// report written, 1 a flag is invalid or --quick found NaN/Inf at default uniforms, 2 no
+    /// Vulkan adapter or an output cannot be written.
     Stress(cli::stress::StressArgs),
     /// Render a scene file's sequence of frames (the sun over a day, TIME advancing, the camera
     /// moving), re-rendering a frame only when an input the shader reads has changed.

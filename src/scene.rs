@@ -22,6 +22,14 @@
 //! elevation = 10.0
 //! azimuth = 0.0
 //! enabled = true
+//! energy = 1.0
+//! color = [1.0, 1.0, 1.0]                          # linear
+//! size = 0.5                                       # angular diameter, degrees
+//!
+//! [[lights]]                                       # LIGHT1 … LIGHT3
+//! elevation = 40.0
+//! azimuth = 180.0
+//! energy = 0.2
 //!
 //! [camera]
 //! position = [0.0, 1.0, 0.0]
@@ -46,7 +54,7 @@
 pub use gdresource::{TextureSetting, UniformSetting};
 use gdshader::diag::{Diagnostic, FileId, SourceDb, render_human};
 use serde::Deserialize;
-use skycore::{Projection, SkyResolution};
+use skycore::{Light, Projection, SkyResolution};
 use std::collections::BTreeMap;
 use std::ops::Range as Span;
 use std::path::{Path, PathBuf};
@@ -118,6 +126,8 @@ pub const TIME: Range = Range::f32_finite("a finite f32, |T| ≤ 3.4028235e38 se
 pub const ENERGY: Range = Range::closed(0.0, 1e6, "0 to 1e6");
 /// A light colour component (linear).
 pub const COLOR: Range = Range::closed(0.0, 1e6, "0 to 1e6");
+/// A light's angular diameter in degrees (Godot's `light_angular_distance`: 0 to 90).
+pub const ANGULAR_SIZE: Range = Range::closed(0.0, 90.0, "0 to 90 degrees");
 /// Frames per second of an animation.
 pub const FPS: Range = Range { min: 0.0, max: 1e6, min_open: true, max_open: false, text: "more than 0, at most 1e6" };
 /// Seconds per frame of an animation.
@@ -169,21 +179,6 @@ pub enum RadianceMode {
     RealTime,
     /// `PROCESS_MODE_INCREMENTAL`: one face a frame, the other five kept from earlier frames.
     Incremental,
-}
-
-/// A light besides the sun (LIGHT1 … LIGHT3).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Light {
-    /// Elevation in degrees.
-    pub elevation: f64,
-    /// Azimuth in degrees (0 toward −Z, 90 toward +X).
-    pub azimuth: f64,
-    /// `LIGHTn_ENERGY`.
-    pub energy: f32,
-    /// `LIGHTn_COLOR`, linear.
-    pub color: [f32; 3],
-    /// `LIGHTn_ENABLED`.
-    pub enabled: bool,
 }
 
 /// A uniform the scene asks to be a pipeline-overridable constant (`overrides = [...]`, as
@@ -302,6 +297,8 @@ pub struct SceneFile {
     pub sun_energy: Option<f32>,
     /// LIGHT0_COLOR (default white).
     pub sun_color: Option<[f32; 3]>,
+    /// The sun's angular diameter in degrees (LIGHT0_SIZE is its radians; default 0).
+    pub sun_size: Option<f64>,
     /// LIGHT1 … LIGHT3.
     pub lights: Vec<Light>,
     /// Camera POSITION.
@@ -387,6 +384,7 @@ struct RawSun {
     enabled: Option<bool>,
     energy: Option<Spanned<f64>>,
     color: Option<Spanned<[f64; 3]>>,
+    size: Option<Spanned<f64>>,
 }
 
 #[derive(Deserialize)]
@@ -397,6 +395,7 @@ struct RawLight {
     enabled: Option<bool>,
     energy: Option<Spanned<f64>>,
     color: Option<Spanned<[f64; 3]>>,
+    size: Option<Spanned<f64>>,
 }
 
 #[derive(Deserialize)]
@@ -600,14 +599,15 @@ impl SceneFile {
             c.error(s.span(), format!("`size`: a cubemap face must be square, not {w}x{h}"));
         }
         let time = raw.time.as_ref().and_then(|t| c.number(t, "time", &TIME)).map(|t| t as f32);
-        let (mut sun_elevation, mut sun_azimuth, mut sun_energy, mut sun_color, mut sun_enabled) =
-            (None, None, None, None, None);
+        let (mut sun_elevation, mut sun_azimuth, mut sun_energy, mut sun_color, mut sun_enabled, mut sun_size) =
+            (None, None, None, None, None, None);
         if let Some(sun) = &raw.sun {
             sun_elevation = sun.elevation.as_ref().and_then(|v| c.number(v, "sun.elevation", &SUN_ELEVATION));
             sun_azimuth = sun.azimuth.as_ref().and_then(|v| c.number(v, "sun.azimuth", &TURN));
             sun_energy = sun.energy.as_ref().and_then(|v| c.number(v, "sun.energy", &ENERGY)).map(|v| v as f32);
             sun_color = sun.color.as_ref().and_then(|v| c.vec3(v, "sun.color", &COLOR)).map(|v| v.map(|x| x as f32));
             sun_enabled = sun.enabled;
+            sun_size = sun.size.as_ref().and_then(|v| c.number(v, "sun.size", &ANGULAR_SIZE));
         }
         let mut lights = Vec::new();
         if let Some(list) = &raw.lights {
@@ -622,11 +622,13 @@ impl SceneFile {
                 let azimuth = l.azimuth.as_ref().and_then(|v| c.number(v, "lights.azimuth", &TURN)).unwrap_or(0.0);
                 let energy = l.energy.as_ref().and_then(|v| c.number(v, "lights.energy", &ENERGY)).unwrap_or(1.0);
                 let color = l.color.as_ref().and_then(|v| c.vec3(v, "lights.color", &COLOR)).unwrap_or([1.0; 3]);
+                let size = l.size.as_ref().and_then(|v| c.number(v, "lights.size", &ANGULAR_SIZE)).unwrap_or(0.0);
                 lights.push(Light {
-                    elevation,
-                    azimuth,
+                    elevation_deg: elevation,
+                    azimuth_deg: azimuth,
                     energy: energy as f32,
                     color: color.map(|x| x as f32),
+                    angular_diameter_deg: size,
                     enabled: l.enabled.unwrap_or(true),
                 });
             }
@@ -727,6 +729,7 @@ impl SceneFile {
             sun_enabled,
             sun_energy,
             sun_color,
+            sun_size,
             lights,
             position,
             fov,
@@ -770,6 +773,7 @@ impl SceneFile {
             sun_enabled: None,
             sun_energy: None,
             sun_color: None,
+            sun_size: None,
             lights: Vec::new(),
             position: None,
             fov: None,

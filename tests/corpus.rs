@@ -658,9 +658,8 @@ fn parity(gpu: &Gpu, oracle: &mut Oracle, entry: &Entry) -> ParityRow {
     let debanding = if debands { gdsky_naga::Debanding::Godot } else { gdsky_naga::Debanding::None };
     let code = godot_code(entry);
     let shader_for = |debanding| {
-        let lowered =
-            gdsky_naga::lower(&front, &gdsky_naga::LowerOptions { debanding: debanding, ..Default::default() })
-                .unwrap_or_else(|_| panic!("{}: does not lower", entry.name));
+        let lowered = gdsky_naga::lower(&front, &gdsky_naga::LowerOptions { debanding, ..Default::default() })
+            .unwrap_or_else(|_| panic!("{}: does not lower", entry.name));
         let wgsl = gdsky_naga::to_wgsl(&lowered).expect("WGSL");
         let shader = SkyShader::new(gpu, &wgsl, SubPasses::of(&front))
             .unwrap_or_else(|e| panic!("{}: {e}", entry.name))

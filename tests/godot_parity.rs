@@ -388,8 +388,7 @@ fn gdsky_renders_what_godot_renders() {
         }
         let debanding = debanding_for(checked);
         let lowered =
-            gdsky_naga::lower(&front, &gdsky_naga::LowerOptions { debanding: debanding, ..Default::default() })
-                .expect("lowers");
+            gdsky_naga::lower(&front, &gdsky_naga::LowerOptions { debanding, ..Default::default() }).expect("lowers");
         let wgsl = gdsky_naga::to_wgsl(&lowered).expect("WGSL");
         let material = material_with_defaults(checked, &lowered, &[]).expect("material");
         let new_shader = || {

@@ -3,20 +3,38 @@
 pub mod animate;
 pub mod bake_lut;
 pub mod bench;
-pub mod bench_skip;
 pub mod check;
 pub mod compare;
 pub mod convert;
 pub mod demo;
 pub mod oracle;
+pub mod progress;
 pub mod render;
 pub mod scene;
 pub mod stress;
-pub mod sweep;
 pub mod tune;
 
+use gdsky::engine::Error;
+use std::io::IsTerminal;
 use std::path::Path;
 use std::process::ExitCode;
+
+/// Whether stderr shows colours: a terminal, and `NO_COLOR` unset.
+pub fn color() -> bool {
+    std::io::stderr().is_terminal() && std::env::var_os("NO_COLOR").is_none()
+}
+
+/// Prints an engine's error on stderr and gives its exit code (1 wrong input, 2 wrong
+/// environment: the CLI contract).
+pub fn fail(err: Error) -> ExitCode {
+    eprint!("{}", err.render(color()));
+    ExitCode::from(err.exit_code())
+}
+
+/// The exit code of a command's outcome, its error printed.
+pub fn exit(outcome: Result<(), Error>) -> ExitCode {
+    outcome.map_or_else(fail, |()| ExitCode::SUCCESS)
+}
 
 /// A clap parser for a value read by its name (`FromStr`), one of `names`, which `--help` lists:
 /// the flags take the vocabulary types themselves (a projection, a sky resolution, a filter)
@@ -36,31 +54,6 @@ pub fn check_output(path: &Path) -> Result<(), ExitCode> {
     skycore::io::check_output(path)
         .map(drop)
         .map_err(|err| environment(format!("cannot write {}: {err}", path.display())))
-}
-
-/// Checks, before any work, an output folder and the files the command will write into it:
-/// the folder exists or, with `create`, can be created; each file that exists there can be
-/// replaced. Exit 2 with the reason.
-pub fn check_output_dir(dir: &Path, create: bool, files: &[&str]) -> Result<(), ExitCode> {
-    skycore::io::check_output_dir(dir, create)
-        .map_err(|err| environment(format!("cannot write into {}: {err}", dir.display())))?;
-    if dir.is_dir() {
-        for file in files {
-            check_output(&dir.join(file))?;
-        }
-    }
-    Ok(())
-}
-
-/// Creates an output folder (when the outputs are ready, after [`check_output_dir`]). Exit 2.
-pub fn create_output_dir(dir: &Path) -> Result<(), ExitCode> {
-    skycore::io::create_output_dir(dir).map_err(|err| environment(format!("cannot create {}: {err}", dir.display())))
-}
-
-/// Writes `bytes` to `path` with the one safe, atomic writer ([`skycore::io::write_atomically`]);
-/// the error names the file.
-pub fn write_file(path: &Path, bytes: &[u8]) -> Result<(), String> {
-    skycore::io::write_atomically(path, bytes).map_err(|err| format!("cannot write {}: {err}", path.display()))
 }
 
 /// Prints `message` as an error and gives exit code 1: the input is wrong (CLI contract).

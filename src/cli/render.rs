@@ -1,12 +1,10 @@
-//! `gdsky render [FILE] -o OUT.exr …` and `gdsky reference -o OUT.exr … [--precision f32|f64]`.
+//! `gdsky render [FILE] -o OUT.exr|OUT.png …` (the engine: [`gdsky::engine::render`]) and
+//! `gdsky reference -o OUT.exr … [--precision f32|f64]` (skyref, the Freeman sky on the CPU).
 
-use super::scene::SkipArgs;
-use super::scene::{
-    LoadedShader, SceneArgs, bake_reason, check_outputs, check_override_conflicts, check_scene_uniforms,
-    load_shader_specialized, open_gpu, open_input, override_names, set_freeman, strip, write_outputs,
-};
-use super::usage;
+use super::progress::Bar;
+use super::scene::{SceneArgs, SkipArgs};
 use clap::{ArgMatches, Args, ValueEnum};
+use gdsky::engine::{self, Error, Input, render::RenderOptions};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
@@ -31,9 +29,11 @@ pub struct RenderArgs {
     /// `overrides`. Repeatable.
     #[arg(long = "override", value_name = "NAME")]
     overrides: Vec<String>,
-    /// The EXR to write: RGBA 32-bit float, scanline, row 0 at the top (replaced atomically; a
-    /// symbolic link is written through to its target). Its directory must exist.
-    #[arg(short = 'o', long = "out", value_name = "OUT.exr")]
+    /// The image to write, its format from the extension: `.exr`, RGBA 32-bit float linear
+    /// radiance, scanline, row 0 at the top; `.png`, an 8-bit sRGB preview tone mapped as
+    /// `--png`. Replaced atomically (a symbolic link is written through to its target); its
+    /// directory must exist.
+    #[arg(short = 'o', long = "out", value_name = "OUT.exr|OUT.png")]
     out: PathBuf,
     /// Also write an 8-bit PNG preview, tone mapped 1 − exp(−L·0.5) and gamma 2.2.
     #[arg(long, value_name = "OUT.png")]
@@ -54,171 +54,80 @@ pub struct RenderArgs {
 }
 
 pub fn run(args: &RenderArgs, matches: &ArgMatches) -> ExitCode {
-    match render(args, matches) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(code) => code,
-    }
+    super::exit(render(args, matches))
 }
 
-fn render(args: &RenderArgs, matches: &ArgMatches) -> Result<(), ExitCode> {
-    let input = open_input(args.file.as_deref())?;
-    let mut scene_args = args.scene.clone();
+fn render(args: &RenderArgs, matches: &ArgMatches) -> Result<(), Error> {
+    let input = Input::open(args.file.as_deref())?;
+    eprint!("{}", input.warnings);
+    let mut scene = args.scene.clone();
     let mut skip = args.skip.clone();
     if let Some(file) = &input.scene {
-        scene_args.merge_file(file, matches);
+        scene.merge_file(file, matches);
         skip.merge_file(file, matches);
     }
-    let (views, width, height) = scene_args.views().map_err(usage)?;
-    let overrides = scene_args.overrides().map_err(usage)?;
+    let setup = scene.setup()?;
     check_outputs(&args.out, args.png.as_ref())?;
-    let occluder = skip.occluder(&views, width, height)?;
-    let options = skip.options(occluder.as_ref());
-    let started = Instant::now();
-    let cli_sets = args.scene.overrides().map_err(usage)?;
-    let names = override_names(input.scene.as_ref(), &args.overrides);
-    check_override_conflicts(&names, input.scene.as_ref(), |n| {
-        bake_reason(n, input.scene.as_ref(), &cli_sets, args.bake_scene)
-    })?;
-    let lowering = gdsky_naga::LowerOptions { overrides: names.clone(), ..args.lowering.options() };
-    let mut loaded = load_shader_specialized(input.shader.as_deref(), input.scene.as_ref(), lowering, |shader| {
-        if args.bake_scene {
-            gdsky::scene::bake_values(shader, input.scene.as_ref(), &cli_sets)
-        } else {
-            Default::default()
-        }
-    })?;
-    check_scene_uniforms(input.scene.as_ref(), &loaded)?;
-    loaded.textures = scene_args.textures(input.scene.as_ref(), &loaded)?;
-    if args.bake_scene {
-        let mut names: Vec<&String> = loaded.baked().keys().collect();
-        names.sort();
-        eprintln!(
-            "baked {} uniform(s): {}",
-            names.len(),
-            names.iter().map(|n| n.as_str()).collect::<Vec<_>>().join(", ")
-        );
+    let trace_png = args.trace_nonfinite.then(|| nonfinite_png_path(&args.out));
+    if let Some(png) = &trace_png {
+        // Derived outputs are checked before any work too.
+        engine::check_image_output(png)?;
     }
-    let convert_time = started.elapsed();
-    // After the conversion is timed: the table is the scene's input, not part of converting.
-    if let Some(note) = loaded.bake_tables(&overrides).map_err(usage)? {
-        eprintln!("{note}");
-    }
-    let material = loaded.material(&overrides).map_err(|e| usage(format!("--set: {e}")))?;
-    let constants = loaded.constants(&overrides).map_err(usage)?;
-    if !names.is_empty() {
-        eprintln!("overrides: {}", names.join(", "));
-    }
-    let gpu = open_gpu()?;
-    let trace_constants = constants.clone();
-    let trace_views = views.clone();
-    let shader = loaded.compile(&gpu)?.with_constants(constants);
-    let builtins = scene_args.builtins(input.scene.as_ref(), width, height);
-    let mut rendered = Vec::with_capacity(views.len());
-    let mut gpu_time = std::time::Duration::ZERO;
-    for view in views {
-        let r = shader.render_with(&gpu, view, width, height, &builtins, &material, &options).map_err(|err| {
-            eprintln!("error: {err}");
-            ExitCode::from(1)
-        })?;
-        gpu_time += r.gpu_wait;
-        rendered.push(r.pixels);
-    }
-    let image = strip(rendered, width, height).map_err(|err| {
-        eprintln!("error: {err}");
-        ExitCode::from(1)
-    })?;
-    eprintln!("convert {convert_time:.2?}, GPU {gpu_time:.2?}, total {:.2?}", started.elapsed());
-    write_outputs(&image, &args.out, args.png.as_ref())?;
-    if args.trace_nonfinite {
-        let traced = TraceInputs { views: &trace_views, width, height, builtins: &builtins, material: &material };
-        trace_nonfinite(&loaded, &gpu, trace_constants, &traced, &image, &args.out)?;
-    }
-    Ok(())
-}
-
-/// What the instrumented render of `--trace-nonfinite` draws: the scene of the render.
-struct TraceInputs<'a> {
-    views: &'a [skyrun::Projection],
-    width: u32,
-    height: u32,
-    builtins: &'a skyrun::SkyBuiltins,
-    material: &'a [u8],
-}
-
-/// `--trace-nonfinite`: renders the instrumented module (see `gdsky_naga::trace`) with the
-/// render's scene, reads each pixel's first site from the alpha channel, prints the report and
-/// writes the PNG that marks the pixels. `image` is the normal render (the PNG's background).
-fn trace_nonfinite(
-    loaded: &LoadedShader,
-    gpu: &skyrun::Gpu,
-    constants: Vec<(String, f64)>,
-    inputs: &TraceInputs<'_>,
-    image: &skyrun::Image,
-    out: &Path,
-) -> Result<(), ExitCode> {
-    let failed = |err: &dyn std::fmt::Display| {
-        eprintln!("error: {err}");
-        ExitCode::from(1)
+    let occluder = skip.occluder(&setup.views()?, setup.width, setup.height)?;
+    let options = RenderOptions {
+        shader: input.shader,
+        scene_file: input.scene,
+        flag_sets: args.scene.setup()?.sets,
+        setup,
+        lowering: args.lowering.options(),
+        bake_scene: args.bake_scene,
+        overrides: args.overrides.clone(),
+        occluder,
+        sky_resolution: skip.sky_resolution,
+        upsample: skip.upsample,
+        trace_nonfinite: args.trace_nonfinite,
     };
-    let traced = gdsky_naga::trace::instrument(&loaded.front, &loaded.lowered).map_err(|diagnostics| {
-        eprint!("{}", gdsky::frontend::diag::render_human(&loaded.front.db, &diagnostics, false));
-        ExitCode::from(1)
-    })?;
-    let wgsl = gdsky_naga::to_wgsl(&traced.lowered).map_err(|e| failed(&e.diagnostic(&loaded.front).message))?;
-    let shader = loaded.compile_wgsl(gpu, &wgsl)?.with_constants(constants);
-    // Every pixel shaded at full resolution, whatever `--occluder`/`--sky-resolution` say: an
-    // id cannot be upsampled, and a hidden pixel can still tell where a NaN comes from.
-    let options = skyrun::RenderOptions::default();
-    let mut views = Vec::with_capacity(inputs.views.len());
-    for view in inputs.views {
-        let r = shader
-            .render_with(gpu, *view, inputs.width, inputs.height, inputs.builtins, inputs.material, &options)
-            .map_err(|e| failed(&e))?;
-        views.push(r.pixels);
+    let bar = Bar::new();
+    let rendered = engine::render::render(&options, &bar)?;
+    drop(bar);
+    let (convert, gpu, total) = (rendered.convert_time, rendered.gpu_time, rendered.total_time);
+    eprintln!("convert {convert:.2?}, GPU {gpu:.2?}, total {total:.2?}");
+    write_outputs(&rendered.image, &args.out, args.png.as_ref())?;
+    if let (Some(trace), Some(png)) = (&rendered.trace, &trace_png) {
+        print!("{}", trace.text);
+        if !trace.overlay.is_empty() {
+            skyrun::write_overlay_png(png, &rendered.image, &trace.overlay).map_err(Error::environment)?;
+            println!("wrote {}", png.display());
+        }
     }
-    let ids = strip(views, inputs.width, inputs.height).map_err(|e| failed(&e))?;
-    let report = gdsky_naga::trace::NonfiniteReport::new(&traced, &ids.pixels);
-    if report.unknown > 0 {
-        // Only the instrumented module writes the alpha; anything else is a harness bug.
-        eprintln!("warning: {} pixel(s) carry no site id (alpha neither 0 nor an id)", report.unknown);
-    }
-    print!("{}", report.text());
-    if report.places.is_empty() {
-        return Ok(());
-    }
-    let png = nonfinite_png_path(out);
-    let overlay: Vec<Option<[u8; 3]>> = ids
-        .pixels
-        .iter()
-        .map(|p| {
-            report
-                .place_of(&traced, p[3])
-                .map(|i| gdsky_naga::trace::PLACE_COLOURS[i.min(gdsky_naga::trace::PLACE_COLOURS.len() - 1)].1)
-        })
-        .collect();
-    skyrun::write_overlay_png(&png, image, &overlay).map_err(|e| {
-        eprintln!("error: {e}");
-        ExitCode::from(2)
-    })?;
-    println!("wrote {}", png.display());
     Ok(())
 }
 
-/// `OUT.nonfinite.png` for `-o OUT.exr` (the `.exr` replaced; any other name gets the suffix).
-pub fn nonfinite_png_path(out: &Path) -> PathBuf {
-    let name = out.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let stem = name.strip_suffix(".exr").or_else(|| name.strip_suffix(".EXR")).unwrap_or(&name);
-    out.with_file_name(format!("{stem}.nonfinite.png"))
+/// Checks, before any work, that the image and the PNG preview can be written where asked: a
+/// known extension, an existing directory, not a directory or a special file.
+pub fn check_outputs(out: &Path, png: Option<&PathBuf>) -> Result<(), Error> {
+    engine::check_image_output(out)?;
+    if let Some(png) = png
+        && engine::check_image_output(png)? != engine::ImageFormat::Png
+    {
+        return Err(Error::input(format!("--png {}: the preview is a `.png`", png.display())));
+    }
+    Ok(())
 }
 
-/// Says which keys of a scene file a command does not apply (`bench` measures the
-/// full-resolution, unoccluded sky its truth describes).
-pub fn warn_unapplied(file: &gdsky::scene::SceneFile, command: &str) {
-    for (key, set) in [("occluder", file.occluder.is_some()), ("sky_resolution", file.sky_resolution.is_some())] {
-        if set {
-            eprintln!("warning: {}: `{key}` does not apply to `{command}`; ignored", file.path.display());
-        }
+/// Writes the image and, when asked, the PNG preview; says what it wrote.
+pub fn write_outputs(image: &skyrun::Image, out: &Path, png: Option<&PathBuf>) -> Result<(), Error> {
+    println!("{}", engine::write_image(image, out)?);
+    if let Some(png) = png {
+        println!("{}", engine::write_image(image, png)?);
     }
+    Ok(())
+}
+
+/// `OUT.nonfinite.png` for `-o OUT.exr` (the extension replaced).
+pub fn nonfinite_png_path(out: &Path) -> PathBuf {
+    let stem = out.file_stem().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    out.with_file_name(format!("{stem}.nonfinite.png"))
 }
 
 /// Working precision of the CPU reference.
@@ -232,9 +141,9 @@ pub enum Precision {
 
 #[derive(Args)]
 pub struct ReferenceArgs {
-    /// The EXR to write: RGBA 32-bit float, scanline, row 0 at the top (replaced atomically; a
-    /// symbolic link is written through to its target). Its directory must exist.
-    #[arg(short = 'o', long = "out", value_name = "OUT.exr")]
+    /// The image to write, its format from the extension (`.exr` linear f32, `.png` preview), as
+    /// `render -o`. Its directory must exist.
+    #[arg(short = 'o', long = "out", value_name = "OUT.exr|OUT.png")]
     out: PathBuf,
     /// Also write an 8-bit PNG preview, tone mapped as `render`'s.
     #[arg(long, value_name = "OUT.png")]
@@ -247,20 +156,19 @@ pub struct ReferenceArgs {
 }
 
 pub fn run_reference(args: &ReferenceArgs) -> ExitCode {
-    match reference(args) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(code) => code,
-    }
+    super::exit(reference(args))
 }
 
-fn reference(args: &ReferenceArgs) -> Result<(), ExitCode> {
+fn reference(args: &ReferenceArgs) -> Result<(), Error> {
     if !args.scene.texture.is_empty() {
-        return Err(usage("--texture: the reference is the Freeman sky, which has no sampler uniforms"));
+        return Err(Error::input("--texture: the reference is the Freeman sky, which has no sampler uniforms"));
     }
-    let (views, width, height) = args.scene.views().map_err(usage)?;
-    let params = freeman_params(&args.scene.overrides().map_err(usage)?).map_err(usage)?;
+    let setup = args.scene.setup()?;
+    let (views, width, height) = (setup.views()?, setup.width, setup.height);
+    let mut params = skyref::FreemanParams::default();
+    engine::set_freeman(&mut params, &setup.sets).map_err(Error::input)?;
     check_outputs(&args.out, args.png.as_ref())?;
-    let scene = args.scene.scene();
+    let scene = setup.scene;
     let started = Instant::now();
     let rendered: Vec<Vec<[f32; 4]>> = views
         .into_iter()
@@ -273,17 +181,6 @@ fn reference(args: &ReferenceArgs) -> Result<(), ExitCode> {
         })
         .collect();
     eprintln!("skyref {:?}: {:.2?}", args.precision, started.elapsed());
-    let image = strip(rendered, width, height).map_err(|err| {
-        eprintln!("error: {err}");
-        ExitCode::from(1)
-    })?;
+    let image = gdsky::measure::freeman::strip(rendered, width, height).map_err(Error::input)?;
     write_outputs(&image, &args.out, args.png.as_ref())
-}
-
-/// The Freeman sky's parameters with `--set` overrides applied (by the shader's uniform names),
-/// each value checked as `render --set` checks it.
-pub fn freeman_params(overrides: &[(String, String)]) -> Result<skyref::FreemanParams, String> {
-    let mut params = skyref::FreemanParams::default();
-    set_freeman(&mut params, overrides)?;
-    Ok(params)
 }

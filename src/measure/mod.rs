@@ -46,9 +46,30 @@
 //!
 //! Timing is never asserted on by the tests; only the shape of the results is.
 
+/// Appends a line to a report (`say!(out, "…", …)`): what the CLI prints on stdout.
+macro_rules! say {
+    ($out:expr, $($arg:tt)*) => {{
+        use std::fmt::Write as _;
+        let _ = writeln!($out, $($arg)*);
+    }};
+}
+
+/// Gives the user a note through a [`crate::engine::Progress`] (`note!(progress, "…", …)`):
+/// what the CLI prints on stderr.
+macro_rules! note {
+    ($progress:expr, $($arg:tt)*) => {
+        $progress.note(&format!($($arg)*))
+    };
+}
+
+pub mod animate;
 pub mod any;
+pub mod bench;
 pub mod freeman;
 pub mod knobs;
 pub mod pareto;
+pub mod plot;
+pub mod skipping;
 pub mod stats;
 pub mod stress;
+pub mod tune;

@@ -93,6 +93,11 @@ pub fn narrow(image: &[[f64; 4]]) -> Vec<[f32; 4]> {
     image.iter().map(|p| p.map(|c| c as f32)).collect()
 }
 
+/// Formats a relative error compactly (`1.23e-4`), `—` for nothing measured.
+pub fn sci(value: f64, measured: bool) -> String {
+    if measured { format!("{value:.2e}") } else { "—".into() }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -18,27 +18,19 @@
 //! Writes `skipping.csv` next to `bench.csv` and prints the table; the CSV columns of the sweep
 //! are untouched.
 
-use super::scene::{LoadedShader, load_shader};
-use super::sweep::{self, ErrorStats};
-use clap::Args;
-use skyref::Projection;
+use super::stats::{self, ErrorStats};
+use crate::engine::{Error, Sky};
+use skycore::Projection;
 use skyrun::{Gpu, Occluder, RenderOptions, SkyBuiltins, SkyResolution, SkyShader, UpsampleFilter};
 use std::path::PathBuf;
-use std::process::ExitCode;
 use std::time::Duration;
 
-/// The `--skipping` flags of `gdsky bench`.
-#[derive(Args, Clone, Debug, Default)]
-pub struct SkippingArgs {
-    /// Also time the occluder at 0/50/90 % coverage and the half/quarter sky resolutions (both
-    /// upsampling filters) at the shader's default uniforms, with their errors; writes
-    /// skipping.csv.
-    #[arg(long)]
-    pub skipping: bool,
-    /// Another sky shader (any, at its default uniforms) for the resolution rows of
-    /// --skipping, measured against its own full-resolution render. Repeatable.
-    #[arg(long, value_name = "FILE")]
-    pub skipping_shader: Vec<PathBuf>,
+/// What `bench --skipping` times besides the bench's shader.
+#[derive(Clone, Debug, Default)]
+pub struct SkippingOptions {
+    /// Other sky shaders (any, at their default uniforms) for the resolution rows, each
+    /// measured against its own full-resolution render.
+    pub shaders: Vec<PathBuf>,
 }
 
 /// One measured variant.
@@ -83,36 +75,33 @@ struct Variant<'a> {
     filter: UpsampleFilter,
 }
 
-fn render(cx: &Context<'_>, v: &Variant<'_>) -> Result<(Vec<[f32; 4]>, Duration), ExitCode> {
+fn render(cx: &Context<'_>, v: &Variant<'_>) -> Result<(Vec<[f32; 4]>, Duration), Error> {
     let options = RenderOptions { occluder: v.occluder.as_ref(), resolution: v.resolution, filter: v.filter };
     let mut time = Duration::ZERO;
     let mut images = Vec::new();
     for &view in cx.views {
-        let r = v.shader.render_with(cx.gpu, view, cx.width, cx.height, cx.builtins, v.material, &options).map_err(
-            |err| {
-                eprintln!("error: {err}");
-                ExitCode::from(1)
-            },
-        )?;
+        let r = v
+            .shader
+            .render_with(cx.gpu, view, cx.width, cx.height, cx.builtins, v.material, &options)
+            .map_err(Error::input)?;
         time += r.gpu_time.unwrap_or(r.gpu_wait);
         images.push(r.pixels);
     }
-    let image = super::scene::strip(images, cx.width, cx.height).map_err(super::usage)?;
+    let image = super::freeman::strip(images, cx.width, cx.height).map_err(Error::input)?;
     Ok((image.pixels, time))
 }
 
 /// Runs the section; returns its rows (the bench prints and writes them).
-pub fn run(cx: &Context<'_>, args: &SkippingArgs) -> Result<Vec<SkipRow>, ExitCode> {
-    let extra: Vec<(String, LoadedShader)> = args
-        .skipping_shader
+pub fn run(cx: &Context<'_>, options: &SkippingOptions) -> Result<Vec<SkipRow>, Error> {
+    let extra: Vec<(String, Sky)> = options
+        .shaders
         .iter()
-        .map(|p| load_shader(Some(p), &gdsky::measure::any::measuring_options()).map(|l| (p.display().to_string(), l)))
+        .map(|p| Sky::load(Some(p), &super::any::measuring_options()).map(|l| (p.display().to_string(), l)))
         .collect::<Result<_, _>>()?;
     let mut compiled = Vec::new();
     for (name, loaded) in &extra {
-        let info = loaded.front.shader.as_ref().ok_or(ExitCode::from(1))?;
-        let material =
-            skyrun::material_with_defaults(info, &loaded.lowered, &[]).map_err(|e| super::usage(e.to_string()))?;
+        let info = loaded.front.shader.as_ref().ok_or_else(|| Error::input("the shader has errors"))?;
+        let material = skyrun::material_with_defaults(info, &loaded.lowered, &[]).map_err(Error::input)?;
         compiled.push((name.clone(), loaded.compile(cx.gpu)?, material));
     }
     let cubemap = cx.views.iter().any(|v| matches!(v, Projection::CubeFace(_)));
@@ -207,9 +196,9 @@ pub fn run(cx: &Context<'_>, args: &SkippingArgs) -> Result<Vec<SkipRow>, ExitCo
             let full = variants
                 .iter()
                 .position(|(n2, k2, var2, _)| n2 == name && *k2 == "resolution" && var2 == "full")
-                .map(|j| sweep::widen(&pixels[j]));
-            let vs_full = full.map(|f| sweep::error_stats(&pixels[i], &f));
-            let vs_truth = (name == &cx.name).then(|| sweep::error_stats(&pixels[i], cx.truth));
+                .map(|j| stats::widen(&pixels[j]));
+            let vs_full = full.map(|f| stats::error_stats(&pixels[i], &f));
+            let vs_truth = (name == &cx.name).then(|| stats::error_stats(&pixels[i], cx.truth));
             (vs_full, vs_truth)
         } else {
             (None, None)
