@@ -6,7 +6,7 @@
 //! as the seed's Shadertoy did from its random texture (a noise library such as FastNoise Lite
 //! would compute the noise, which is the shader's job here).
 //!
-//! `cargo run --example sunfall_noise [-- OUT.png]`; `tests/seed_skies.rs` checks that the shipped
+//! `cargo run --example sunfall_noise [-- OUT.png]`; `tests/godot/seed_skies.rs` checks that the shipped
 //! file is what this writes.
 
 /// Side of the texture, in texels.

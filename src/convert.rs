@@ -27,23 +27,12 @@ pub type IncludeLoader = Arc<dyn Fn(&Path) -> std::io::Result<Vec<u8>> + Send + 
 #[derive(Clone, Default)]
 #[non_exhaustive]
 pub struct Options {
-    /// Uniforms baked into the shader as constants, each with the text of its value as
-    /// `gdsky convert --set NAME=VALUE` takes it (`1.5`, `24`, `true`, `0.1,0.2,0.3`); when a
-    /// name comes twice the last value counts.
-    pub set: Vec<(String, String)>,
-    /// Scalar material uniforms emitted as pipeline-overridable constants (WGSL `override`
-    /// `@id(k)` and SPIR-V specialization constant `SpecId k` for the k-th name), as
-    /// `gdsky convert --override NAME` does.
-    pub overrides: Vec<String>,
-    /// Godot's sky debanding for shaders that declare `use_debanding` ([`Debanding::None`] turns
-    /// it off).
-    pub debanding: Debanding,
-    /// How SKY_COORDS is computed ([`SkyCoords::Exact`]: as Godot 4.3–4.5).
-    pub sky_coords: SkyCoords,
-    /// Where the sky lies in depth: the far plane of standard or reversed Z.
-    pub depth: DepthConvention,
-    /// SPIR-V with `OpName` debug names (readable disassembly; about 12 % more bytes).
-    pub spirv_debug_names: bool,
+    /// How the shader is lowered: uniforms baked into constants ([`Options::set`]), uniforms
+    /// made pipeline-overridable constants ([`Options::override_uniform`]), Godot's debanding,
+    /// SKY_COORDS and the depth convention. Its precision is always f32 here (WGSL has no f64).
+    pub lowering: LowerOptions,
+    /// What the SPIR-V carries besides the code ([`Options::spirv_debug_names`]).
+    pub spirv: SpirvOptions,
     /// Reads `#include`d files; `None` reads them from the file system with gdsky's bounded
     /// reader.
     pub include_loader: Option<IncludeLoader>,
@@ -52,12 +41,8 @@ pub struct Options {
 impl fmt::Debug for Options {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.debug_struct("Options")
-            .field("set", &self.set)
-            .field("overrides", &self.overrides)
-            .field("debanding", &self.debanding)
-            .field("sky_coords", &self.sky_coords)
-            .field("depth", &self.depth)
-            .field("spirv_debug_names", &self.spirv_debug_names)
+            .field("lowering", &self.lowering)
+            .field("spirv", &self.spirv)
             .field("include_loader", &self.include_loader.as_ref().map(|_| "custom"))
             .finish()
     }
@@ -69,45 +54,51 @@ impl Options {
         Self::default()
     }
 
-    /// Bakes uniform `name` at `value` (the text `--set NAME=VALUE` takes).
+    /// Bakes uniform `name` at `value` into the shader as a constant, as `gdsky convert --set
+    /// NAME=VALUE` does (`1.5`, `24`, `true`, `0.1,0.2,0.3`); a name set twice keeps the last
+    /// value. The uniform leaves the material block and the reflection lists it under `baked`.
     #[must_use]
     pub fn set(mut self, name: impl Into<String>, value: impl Into<String>) -> Self {
-        self.set.push((name.into(), value.into()));
+        self.lowering.baked.insert(name.into(), value.into());
         self
     }
 
-    /// Emits uniform `name` as the next pipeline-overridable constant.
+    /// Emits scalar material uniform `name` as the next pipeline-overridable constant (WGSL
+    /// `override` `@id(k)` and SPIR-V specialization constant `SpecId k` for the k-th name), as
+    /// `gdsky convert --override NAME` does.
     #[must_use]
     pub fn override_uniform(mut self, name: impl Into<String>) -> Self {
-        self.overrides.push(name.into());
+        self.lowering.overrides.push(name.into());
         self
     }
 
-    /// With Godot's debanding or without it.
+    /// With Godot's debanding for shaders that declare `use_debanding`, or without it
+    /// ([`Debanding::None`]).
     #[must_use]
     pub fn debanding(mut self, debanding: Debanding) -> Self {
-        self.debanding = debanding;
+        self.lowering.debanding = debanding;
         self
     }
 
-    /// With SKY_COORDS computed as `sky_coords` says.
+    /// With SKY_COORDS computed as `sky_coords` says ([`SkyCoords::Exact`]: as Godot 4.3–4.5).
     #[must_use]
     pub fn sky_coords(mut self, sky_coords: SkyCoords) -> Self {
-        self.sky_coords = sky_coords;
+        self.lowering.sky_coords = sky_coords;
         self
     }
 
-    /// With the sky on the far plane of `depth`.
+    /// With the sky on the far plane of `depth` (standard or reversed Z).
     #[must_use]
     pub fn depth(mut self, depth: DepthConvention) -> Self {
-        self.depth = depth;
+        self.lowering.depth = depth;
         self
     }
 
-    /// With (or without) SPIR-V debug names.
+    /// With (or without) SPIR-V debug names (`OpName`: readable disassembly; about 12 % more
+    /// bytes).
     #[must_use]
     pub fn spirv_debug_names(mut self, on: bool) -> Self {
-        self.spirv_debug_names = on;
+        self.spirv.debug_names = on;
         self
     }
 
@@ -121,18 +112,6 @@ impl Options {
     ) -> Self {
         self.include_loader = Some(Arc::new(loader));
         self
-    }
-
-    /// The lowering's options for these.
-    pub fn lower_options(&self) -> LowerOptions {
-        LowerOptions {
-            baked: self.set.iter().cloned().collect(),
-            overrides: self.overrides.clone(),
-            debanding: self.debanding,
-            sky_coords: self.sky_coords,
-            depth: self.depth,
-            ..LowerOptions::default()
-        }
     }
 }
 
@@ -281,7 +260,7 @@ pub fn convert(name: &str, source: &str, options: &Options) -> Result<Converted,
     if front.shader.is_none() {
         return Err(ConvertError::new(front.db, front.diagnostics));
     }
-    let lowered = match gdsky_naga::lower(&front, &options.lower_options()) {
+    let lowered = match gdsky_naga::lower(&front, &options.lowering) {
         Ok(lowered) => lowered,
         Err(diagnostics) => return Err(ConvertError::new(front.db, diagnostics)),
     };
@@ -296,7 +275,7 @@ pub fn convert_file(path: &Path, options: &Options) -> std::io::Result<Result<Co
     if front.shader.is_none() {
         return Ok(Err(ConvertError::new(front.db, front.diagnostics)));
     }
-    let lowered = match gdsky_naga::lower(&front, &options.lower_options()) {
+    let lowered = match gdsky_naga::lower(&front, &options.lowering) {
         Ok(lowered) => lowered,
         Err(diagnostics) => return Ok(Err(ConvertError::new(front.db, diagnostics))),
     };
@@ -332,9 +311,8 @@ pub fn emit(
     let Some(shader) = front.shader.as_ref() else {
         return Err(ConvertError::new(front.db, front.diagnostics));
     };
-    let spirv_options = SpirvOptions { debug_names: options.spirv_debug_names };
     let texts = gdsky_naga::to_wgsl(lowered)
-        .and_then(|wgsl| gdsky_naga::to_spirv_with(lowered, &spirv_options).map(|spirv| (wgsl, spirv)));
+        .and_then(|wgsl| gdsky_naga::to_spirv_with(lowered, &options.spirv).map(|spirv| (wgsl, spirv)));
     let (wgsl, spirv) = match texts {
         Ok(texts) => texts,
         Err(e) => {

@@ -73,7 +73,7 @@ fn convert(args: &ConvertArgs) -> Result<(), Error> {
         .depth(if args.reversed_z { gdsky::DepthConvention::Reversed } else { gdsky::DepthConvention::Standard })
         .spirv_debug_names(args.debug_names);
     let mut options = ConvertOptions { input: Some(input), sets, bake_scene: args.bake_scene, options };
-    options.options.overrides = args.overrides.clone();
+    options.options.lowering.overrides = args.overrides.clone();
     let converted = engine::convert::convert(&options)?;
     eprint!("{}", converted.warnings);
     let json = converted.reflection_json() + "\n";

@@ -26,7 +26,7 @@ pub fn convert(options: &ConvertOptions) -> Result<crate::Converted, Error> {
         None => (None, None),
     };
     let sets = &options.sets;
-    let overrides = super::override_names(scene, &options.options.overrides);
+    let overrides = super::override_names(scene, &options.options.lowering.overrides);
     // `--set` always bakes in `convert`; under --bake-scene the scene's uniforms do too.
     super::check_override_conflicts(&overrides, scene, |n| {
         if sets.iter().any(|(s, _)| s == n) {
@@ -36,7 +36,7 @@ pub fn convert(options: &ConvertOptions) -> Result<crate::Converted, Error> {
         }
     })?;
     let mut conversion = options.options.clone();
-    let lowering = gdsky_naga::LowerOptions { overrides: overrides.clone(), ..conversion.lower_options() };
+    let lowering = gdsky_naga::LowerOptions { overrides: overrides.clone(), ..conversion.lowering.clone() };
     let sky = Sky::load_specialized(shader, scene, lowering, |checked| {
         let baked: HashMap<String, String> = if options.bake_scene {
             crate::scene::bake_values(checked, scene, sets)
@@ -46,8 +46,7 @@ pub fn convert(options: &ConvertOptions) -> Result<crate::Converted, Error> {
         // Baking "every uniform at its default" leaves the overrides alone.
         baked.into_iter().filter(|(name, _)| !overrides.contains(name)).collect()
     })?;
-    conversion.set = sky.baked().iter().map(|(k, v)| (k.clone(), v.clone())).collect();
-    conversion.overrides = overrides;
+    conversion.lowering = sky.lowered.options.clone();
     let Sky { front, lowered, .. } = sky;
     crate::emit(front, &lowered, &conversion).map_err(Error::Diagnostics)
 }

@@ -1,5 +1,7 @@
 //! A crate that compiles the Freeman sky at build time (see `build.rs`) and exposes what a
-//! renderer needs: the WGSL, the SPIR-V words and the material struct.
+//! renderer needs: the WGSL, the SPIR-V words and the material struct; and that converts shader
+//! text it generates while running ([`gradient_sky`]) with the same converter, in memory. Both
+//! depend on `gdsky` with `default-features = false`: the converter alone.
 
 include!(concat!(env!("OUT_DIR"), "/freeman_sky.rs"));
 
@@ -11,6 +13,28 @@ pub const FREEMAN_SKY_SPIRV: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/f
 
 /// The reflection JSON.
 pub const FREEMAN_SKY_REFLECTION: &str = include_str!(concat!(env!("OUT_DIR"), "/freeman_sky.json"));
+
+/// A two-colour gradient sky, written as Godot shading language and converted in memory, with
+/// both colours baked into the module as constants (so it has no material block to bind).
+///
+/// ```
+/// let sky = gdsky_build_example::gradient_sky([0.1, 0.3, 0.8], [0.9, 0.8, 0.7])?;
+/// assert!(sky.wgsl.contains("fn fs_camera"));
+/// assert!(!sky.reflection.bindings.material.declared);
+/// # Ok::<(), gdsky::ConvertError>(())
+/// ```
+pub fn gradient_sky(zenith: [f32; 3], horizon: [f32; 3]) -> Result<gdsky::Converted, gdsky::ConvertError> {
+    const GRADIENT: &str = "shader_type sky;
+uniform vec3 zenith : source_color = vec3(0.1, 0.3, 0.8);
+uniform vec3 horizon : source_color = vec3(0.9, 0.8, 0.7);
+void sky() {
+    COLOR = mix(horizon, zenith, clamp(EYEDIR.y, 0.0, 1.0));
+}
+";
+    let colour = |[r, g, b]: [f32; 3]| format!("{r:?},{g:?},{b:?}");
+    let options = gdsky::Options::default().set("zenith", colour(zenith)).set("horizon", colour(horizon));
+    gdsky::convert("gradient.gdshader", GRADIENT, &options)
+}
 
 #[cfg(test)]
 mod tests {
@@ -52,5 +76,14 @@ mod tests {
     fn outputs_are_real_shaders() {
         assert!(FREEMAN_SKY_WGSL.contains("@fragment"));
         assert_eq!(&FREEMAN_SKY_SPIRV[..4], &0x0723_0203u32.to_le_bytes());
+    }
+
+    #[test]
+    fn the_generated_sky_bakes_its_colours() {
+        let sky = gradient_sky([0.25, 0.5, 1.0], [1.0, 0.75, 0.5]).expect("converts");
+        assert_eq!(sky.reflection.baked["zenith"], "0.25,0.5,1.0");
+        assert_eq!(sky.reflection.baked["horizon"], "1.0,0.75,0.5");
+        assert!(sky.reflection.uniforms.is_empty());
+        assert!(!sky.rust.contains("struct"), "no material, no struct: {}", sky.rust);
     }
 }

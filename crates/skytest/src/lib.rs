@@ -1,0 +1,212 @@
+//! # skytest — what gdsky's tests share
+//!
+//! A dev-only crate, as wgpu's `wgpu-test`: every test binary of the workspace takes its adapter,
+//! scratch folders, CLI runner and oracle set-ups from here rather than from a copied `common`
+//! module.
+//!
+//! * [`gpu`]: the Vulkan device a test renders on (lavapipe where there is no GPU); without one a
+//!   test fails, it does not skip. `XDG_RUNTIME_DIR` comes from `.cargo/config.toml`, so no test
+//!   mutates the environment of a process whose other tests run in parallel.
+//! * [`scratch!`](crate::scratch): an empty folder under the test crate's `CARGO_TARGET_TMPDIR`.
+//! * [`Cli`] and [`gdsky!`](crate::gdsky): the `gdsky` binary run as a user runs it (a private
+//!   runtime folder, no colour), with [`text`] for assertion messages.
+//! * [`spirv_val`]: Khronos' validator on a module, as the tests hold every SPIR-V to it.
+//! * [`converted_freeman`]: the bundled fixture checked, lowered and emitted.
+//! * [`SetUp`], [`SET_UPS`]: the camera and sun the Godot comparisons give both renderers.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use std::sync::{Mutex, MutexGuard, OnceLock};
+
+/// The workspace's root folder (where `fixtures/`, `shaders/` and `tests/` are).
+pub fn workspace_root() -> &'static Path {
+    // This crate lives at crates/skytest.
+    Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."))
+}
+
+/// A path under the workspace root.
+pub fn root_path(relative: &str) -> PathBuf {
+    workspace_root().join(relative)
+}
+
+/// The Vulkan device a test renders on; without one the test fails, it does not skip.
+pub fn gpu() -> skyrun::Gpu {
+    let gpu = skyrun::Gpu::new().unwrap_or_else(|e| panic!("this test needs a Vulkan adapter and found none: {e}"));
+    eprintln!("adapter: {}", gpu.adapter_info());
+    gpu
+}
+
+/// An empty folder `BASE/group/name` (removed first when it exists).
+pub fn scratch_in(base: &Path, group: &str, name: &str) -> PathBuf {
+    let dir = base.join(group).join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("scratch folder {}: {e}", dir.display()));
+    dir
+}
+
+/// An empty folder `CARGO_TARGET_TMPDIR/group/name` of the calling test crate.
+#[macro_export]
+macro_rules! scratch {
+    ($group:expr, $name:expr) => {
+        $crate::scratch_in(::std::path::Path::new(env!("CARGO_TARGET_TMPDIR")), $group, $name)
+    };
+}
+
+/// The `gdsky` binary, run as a user runs it.
+#[derive(Clone, Debug)]
+pub struct Cli {
+    binary: PathBuf,
+}
+
+impl Cli {
+    /// The binary at `binary` (a test crate's `env!("CARGO_BIN_EXE_gdsky")`: [`gdsky!`](crate::gdsky)).
+    pub fn new(binary: impl Into<PathBuf>) -> Self {
+        Self { binary: binary.into() }
+    }
+
+    /// A command for the binary with a private XDG_RUNTIME_DIR (the Vulkan loader warns without
+    /// one) and no colour, to add arguments to.
+    pub fn command(&self) -> Command {
+        let runtime = std::env::temp_dir().join("gdsky-xdg-runtime");
+        let _ = std::fs::create_dir_all(&runtime);
+        let mut command = Command::new(&self.binary);
+        command.env("XDG_RUNTIME_DIR", runtime).env("NO_COLOR", "1");
+        command
+    }
+
+    /// Runs the binary with `args`.
+    pub fn run(&self, args: &[&str]) -> Output {
+        self.run_with(args, &[])
+    }
+
+    /// Runs the binary with `args` and `env` set.
+    pub fn run_with(&self, args: &[&str], env: &[(&str, &Path)]) -> Output {
+        let mut command = self.command();
+        command.args(args);
+        for (key, value) in env {
+            command.env(key, value);
+        }
+        command.output().unwrap_or_else(|e| panic!("{} runs: {e}", self.binary.display()))
+    }
+}
+
+/// The calling test crate's `gdsky` binary ([`Cli`]).
+#[macro_export]
+macro_rules! gdsky {
+    () => {
+        $crate::Cli::new(env!("CARGO_BIN_EXE_gdsky"))
+    };
+}
+
+/// stdout then stderr, for assertion messages.
+pub fn text(o: &Output) -> String {
+    format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr))
+}
+
+/// Runs `spirv-val --target-env vulkan1.1` on `words`; the validator's message when it refuses.
+pub fn spirv_val(words: &[u32]) -> Result<(), String> {
+    use std::sync::atomic::{AtomicU64, Ordering};
+    static NEXT: AtomicU64 = AtomicU64::new(0);
+    let n = NEXT.fetch_add(1, Ordering::Relaxed);
+    let path = std::env::temp_dir().join(format!("skytest-{}-{n}.spv", std::process::id()));
+    let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
+    std::fs::write(&path, bytes).map_err(|e| e.to_string())?;
+    let out = Command::new("spirv-val")
+        .args(["--target-env", "vulkan1.1"])
+        .arg(&path)
+        .output()
+        .map_err(|e| format!("cannot run spirv-val (Debian package spirv-tools): {e}"))?;
+    let _ = std::fs::remove_file(&path);
+    if out.status.success() {
+        Ok(())
+    } else {
+        Err(format!("spirv-val: {}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr)))
+    }
+}
+
+/// The Freeman sky (the fixture) checked with its defaults' lowering: the front end's output,
+/// the validated module, its WGSL.
+pub fn converted_freeman() -> (gdshader::FrontendOutput, gdsky_naga::Lowered, String) {
+    let front = gdshader::check_file(&root_path("fixtures/freeman_sky.gdshader")).expect("the fixture is readable");
+    let lowered = gdsky_naga::lower(&front, &gdsky_naga::LowerOptions::default()).expect("the Freeman sky lowers");
+    let wgsl = gdsky_naga::to_wgsl(&lowered).expect("WGSL");
+    (front, lowered, wgsl)
+}
+
+/// A camera and sun, given to gdsky and to Godot each in its own terms.
+#[derive(Clone, Copy, Debug)]
+pub struct SetUp {
+    /// How a report names it.
+    pub name: &'static str,
+    /// Vertical field of view, degrees.
+    pub fov_deg: f64,
+    /// Camera yaw, degrees.
+    pub yaw_deg: f64,
+    /// Camera pitch, degrees.
+    pub pitch_deg: f64,
+    /// Camera height, metres.
+    pub altitude_m: f64,
+    /// Sun elevation and azimuth, degrees.
+    pub sun: (f64, f64),
+}
+
+/// The Godot comparisons' two set-ups: looking toward −Z with the sun low ahead, and a turned,
+/// raised camera 500 m up with the sun at 35°.
+pub const SET_UPS: [SetUp; 2] = [
+    SetUp {
+        name: "toward -Z, sun 10°",
+        fov_deg: 90.0,
+        yaw_deg: 0.0,
+        pitch_deg: 0.0,
+        altitude_m: 1.0,
+        sun: (10.0, 0.0),
+    },
+    SetUp {
+        name: "yaw 120° pitch 35°, sun 35°/150°",
+        fov_deg: 60.0,
+        yaw_deg: 120.0,
+        pitch_deg: 35.0,
+        altitude_m: 500.0,
+        sun: (35.0, 150.0),
+    },
+];
+
+impl SetUp {
+    /// The set-up as a scene.
+    pub fn scene(&self) -> skycore::Scene {
+        skycore::Scene::default()
+            .with_sun(self.sun.0, self.sun.1)
+            .with_position(glam::DVec3::new(0.0, self.altitude_m, 0.0))
+            .with_fov(self.fov_deg)
+            .with_view(self.yaw_deg, self.pitch_deg)
+    }
+
+    /// An oracle job of `code` at `width`×`height` in this set-up, with `uniforms`.
+    pub fn job(
+        &self,
+        code: &str,
+        width: u32,
+        height: u32,
+        uniforms: &[(String, skyoracle::Parameter)],
+    ) -> skyoracle::Job {
+        let mut job = skyoracle::Job::new(code, width, height);
+        job.scene = self.scene();
+        job.uniforms = uniforms.to_vec();
+        job
+    }
+}
+
+/// The Godot oracle this test binary shares, started from the workspace on first use
+/// (`scripts/install-oracle.sh` puts it there): booting and calibrating Chromium takes seconds,
+/// so every test of a binary takes turns on one. Without an installation every test fails with
+/// what to install (the start's error is kept, so none boots again); a test that panicked while
+/// holding the oracle leaves it usable for the others.
+pub fn oracle() -> MutexGuard<'static, skyoracle::Oracle> {
+    static ORACLE: OnceLock<Result<Mutex<skyoracle::Oracle>, String>> = OnceLock::new();
+    let started =
+        ORACLE.get_or_init(|| skyoracle::Oracle::start(workspace_root()).map(Mutex::new).map_err(|e| e.to_string()));
+    match started {
+        Ok(oracle) => oracle.lock().unwrap_or_else(|poisoned| poisoned.into_inner()),
+        Err(message) => panic!("this test needs the Godot oracle: {message}"),
+    }
+}

@@ -1,0 +1,29 @@
+//! gdsky against real Godot 4.6 (the oracle: Godot's Web export in headless Chromium,
+//! `scripts/install-oracle.sh`): the front end's verdicts, renders of the test and shipped
+//! shaders, the seeds' skies, generated noise, gradient and curve textures, and (with
+//! `GDSKY_CORPUS_DIR`, ignored by default) the corpus of real skies.
+
+mod corpus;
+mod godot_frontend;
+mod godot_parity;
+mod noise_oracle;
+mod ramp_oracle;
+mod seed_skies;
+
+/// The suite's handles on the binary and its scratch folders (skytest's, for this crate).
+mod common {
+    use std::path::PathBuf;
+    use std::process::Output;
+
+    pub use skytest::text;
+
+    /// Runs `gdsky` with `args`.
+    pub fn gdsky(args: &[&str]) -> Output {
+        skytest::gdsky!().run(args)
+    }
+
+    /// An empty folder `CARGO_TARGET_TMPDIR/group/name`.
+    pub fn scratch(group: &str, name: &str) -> PathBuf {
+        skytest::scratch!(group, name)
+    }
+}
