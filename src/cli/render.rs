@@ -181,6 +181,6 @@ fn reference(args: &ReferenceArgs) -> Result<(), Error> {
         })
         .collect();
     eprintln!("skyref {:?}: {:.2?}", args.precision, started.elapsed());
-    let image = gdsky::measure::freeman::strip(rendered, width, height).map_err(Error::input)?;
+    let image = skyrun::Image::side_by_side(rendered, width, height).map_err(Error::input)?;
     write_outputs(&image, &args.out, args.png.as_ref())
 }

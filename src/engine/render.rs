@@ -110,7 +110,7 @@ pub fn render(options: &RenderOptions, progress: &dyn Progress) -> Result<Render
         gpu_time += r.gpu_wait;
         rendered.push(r.pixels);
     }
-    let image = crate::measure::freeman::strip(rendered, width, height).map_err(Error::input)?;
+    let image = skyrun::Image::side_by_side(rendered, width, height).map_err(Error::input)?;
     let total_time = started.elapsed();
     let trace = match options.trace_nonfinite {
         true => Some(trace(&loaded, &gpu, constants, &views, setup, &builtins, &material)?),
@@ -145,7 +145,7 @@ fn trace(
             .map_err(Error::input)?;
         images.push(r.pixels);
     }
-    let ids = crate::measure::freeman::strip(images, setup.width, setup.height).map_err(Error::input)?;
+    let ids = skyrun::Image::side_by_side(images, setup.width, setup.height).map_err(Error::input)?;
     let report = gdsky_naga::trace::NonfiniteReport::new(&traced, &ids.pixels);
     let mut text = String::new();
     if report.unknown > 0 {

@@ -4,7 +4,7 @@
 use super::Error;
 use crate::ConvertError;
 use crate::scene::SceneFile;
-use std::collections::{BTreeSet, HashMap};
+use std::collections::HashMap;
 use std::path::Path;
 
 /// The Freeman sky (seed 000, CC0), built into the library so `gdsky render` and `gdsky demo`
@@ -288,44 +288,6 @@ pub fn freeman_names() -> Vec<&'static str> {
 }
 
 impl Sky {
-    /// Loads FILE (the bundled Freeman sky without one) as the measuring engine lowers it and
-    /// checks that it is Freeman-compatible: exactly the Freeman sky's uniforms, with the same
-    /// types (and optionally freeman_lut's `transmittance_table`, which the commands bake from
-    /// these uniforms). skyref models the Freeman sky's integral, so it is the truth only for
-    /// such a shader: wrong input when it is not. A note for `progress` when FILE's own defaults
-    /// differ from skyref's (both sides use skyref's).
-    pub fn load_freeman(file: Option<&Path>, progress: &dyn super::Progress) -> Result<Sky, Error> {
-        let loaded = Sky::load(file, &crate::measure::any::measuring_options())?;
-        let shader = loaded.front.shader.as_ref().ok_or_else(|| Error::input("the shader has errors"))?;
-        let name = file.map(|f| f.display().to_string()).unwrap_or_else(|| BUNDLED_NAME.to_string());
-        // freeman_lut's table is an input of the same model, baked from these uniforms
-        // (Sky::bake_tables), not a uniform skyref lacks.
-        let have: BTreeSet<&str> =
-            shader.uniforms.iter().map(|u| u.name.as_str()).filter(|n| *n != TRANSMITTANCE_TABLE).collect();
-        let want: BTreeSet<&str> = freeman_names().into_iter().collect();
-        if have != want {
-            let list = |names: Vec<&str>| if names.is_empty() { "none".to_string() } else { names.join(", ") };
-            return Err(Error::input(format!(
-                "{name} is not Freeman-compatible: skyref, the truth, models the Freeman sky's 22 uniforms \
-                 (missing: {}; not in the Freeman sky: {})",
-                list(want.difference(&have).copied().collect()),
-                list(have.difference(&want).copied().collect())
-            )));
-        }
-        let skyrefs = loaded
-            .freeman_material(&skyref::FreemanParams::default())
-            .map_err(|err| Error::input(format!("{name} is not Freeman-compatible: {err}")))?;
-        // The uniforms' defaults come from skyref on both sides; say so when FILE's own differ.
-        let own = skyrun::material_with_defaults(shader, &loaded.lowered, &[]).unwrap_or_default();
-        if skyrefs != own {
-            progress.note(&format!(
-                "note: {name}'s uniform defaults differ from the Freeman sky's; both the shader and skyref use the \
-                 Freeman sky's (skyref's) values"
-            ));
-        }
-        Ok(loaded)
-    }
-
     /// The material block of a Freeman-compatible shader from skyref's parameters, so that the
     /// GPU and skyref start from the same (f32-rounded) values; the uniforms baked into
     /// constants and the overrides (pipeline constants) left out.

@@ -347,7 +347,7 @@ pub fn animate(options: &AnimateOptions, progress: &dyn Progress) -> Result<Anim
             rendered += 1;
             let pixels: Vec<Vec<[f32; 4]>> =
                 faces.iter().map(|f| f.as_ref().map(|f| f.1.clone()).unwrap_or_default()).collect();
-            let image: Image = super::freeman::strip(pixels, width, height).map_err(Error::input)?;
+            let image: Image = skyrun::Image::side_by_side(pixels, width, height).map_err(Error::input)?;
             skyrun::write_exr(&exr, &image).map_err(|e| Error::environment(e.to_string()))?;
             skyrun::write_png_preview(&png, &image, skyrun::DEFAULT_EXPOSURE, skyrun::DEFAULT_WHITE)
                 .map_err(|e| Error::environment(e.to_string()))?;

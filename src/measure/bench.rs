@@ -38,7 +38,7 @@
 //! exactly, its pixels match the checksum recorded with them, and a few pixels recomputed now
 //! match it bit for bit. Anything else is recomputed.
 
-use super::freeman::{TruthMode, cache_dir, cached_truth, strip};
+use super::freeman::{TruthMode, cache_dir, cached_truth};
 use super::knobs::{self, Knob, combinations};
 use super::skipping::SkippingOptions;
 use super::stats::{self, ErrorStats};
@@ -624,7 +624,7 @@ pub fn bench(options: &BenchOptions, progress: &dyn Progress) -> Result<BenchRep
         let s = &subjects[e.subject];
         progress.message(&format!("{}: {}: warm-up render and error", s.name, s.label(&e.values)));
         let (images, _) = render_all(shader_of(e), &e.material)?;
-        let image = strip(images, width, height).map_err(Error::input)?;
+        let image = skyrun::Image::side_by_side(images, width, height).map_err(Error::input)?;
         let truth = &truths.iter().find(|(p, _)| *p == e.truth_params).ok_or(Error::input("failed"))?.1;
         errors.push(stats::error_stats(&image.pixels, truth));
         progress.step();

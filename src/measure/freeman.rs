@@ -6,11 +6,15 @@
 //! The cache: an entry is used only when its key file matches exactly, its pixels match the
 //! checksum recorded with them, and a few pixels recomputed now match it bit for bit. Anything
 //! else is recomputed (and a failure to store is only reported: the truth is still returned).
+//!
+//! [`Sky::load_freeman`] loads a shader whose truth this is.
 
+use crate::engine::{BUNDLED_NAME, Error, Progress, Sky, TRANSMITTANCE_TABLE, freeman_names};
 use skyref::converged::Converged;
 use skyref::truth::Truth;
 use skyref::{FreemanParams, Projection, Scene};
 use skyrun::Image;
+use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
 /// The truth of a bench: which one, with its settings.
@@ -199,7 +203,7 @@ pub fn cached_truth(
                 .map(|&view| super::stats::narrow(&mode.render(params, scene, view, width, height)))
                 .collect();
             // `strip` only fails for an empty image, which SceneArgs rules out.
-            let image = strip(rendered, width, height).unwrap_or_else(|_| Image {
+            let image = Image::side_by_side(rendered, width, height).unwrap_or_else(|_| Image {
                 width: strip_w,
                 height,
                 pixels: vec![[0.0; 4]; (strip_w * height) as usize],
@@ -222,20 +226,6 @@ pub fn cached_truth(
     }
 }
 
-/// Joins same-sized views left to right into one image (the cubemap strip).
-pub fn strip(views: Vec<Vec<[f32; 4]>>, width: u32, height: u32) -> Result<Image, skyrun::ImageError> {
-    let n = views.len();
-    let (w, h) = (width as usize, height as usize);
-    let mut pixels = vec![[0.0; 4]; n * w * h];
-    for (i, view) in views.iter().enumerate() {
-        for (y, row) in view.chunks_exact(w).enumerate() {
-            let at = y * n * w + i * w;
-            pixels[at..at + w].copy_from_slice(row);
-        }
-    }
-    Image::new(width * n as u32, height, pixels)
-}
-
 /// Whether `shader` is Freeman-compatible: exactly the Freeman sky's uniform names (and
 /// optionally freeman_lut's `transmittance_table`, baked from them), so skyref is its truth.
 /// The types are checked when the material is filled; this is the quiet test the commands use
@@ -246,4 +236,44 @@ pub fn compatible(shader: &gdshader::CheckedShader) -> bool {
     let have: std::collections::BTreeSet<&str> =
         shader.uniforms.iter().map(|u| u.name.as_str()).filter(|n| *n != "transmittance_table").collect();
     have == want
+}
+
+impl Sky {
+    /// Loads FILE (the bundled Freeman sky without one) as the measuring engine lowers it and
+    /// checks that it is Freeman-compatible: exactly the Freeman sky's uniforms, with the same
+    /// types (and optionally freeman_lut's `transmittance_table`, which the commands bake from
+    /// these uniforms). skyref models the Freeman sky's integral, so it is the truth only for
+    /// such a shader: wrong input when it is not. A note for `progress` when FILE's own defaults
+    /// differ from skyref's (both sides use skyref's).
+    pub fn load_freeman(file: Option<&Path>, progress: &dyn Progress) -> Result<Sky, Error> {
+        let loaded = Sky::load(file, &super::any::measuring_options())?;
+        let shader = loaded.front.shader.as_ref().ok_or_else(|| Error::input("the shader has errors"))?;
+        let name = file.map(|f| f.display().to_string()).unwrap_or_else(|| BUNDLED_NAME.to_string());
+        // freeman_lut's table is an input of the same model, baked from these uniforms
+        // (Sky::bake_tables), not a uniform skyref lacks.
+        let have: BTreeSet<&str> =
+            shader.uniforms.iter().map(|u| u.name.as_str()).filter(|n| *n != TRANSMITTANCE_TABLE).collect();
+        let want: BTreeSet<&str> = freeman_names().into_iter().collect();
+        if have != want {
+            let list = |names: Vec<&str>| if names.is_empty() { "none".to_string() } else { names.join(", ") };
+            return Err(Error::input(format!(
+                "{name} is not Freeman-compatible: skyref, the truth, models the Freeman sky's 22 uniforms \
+                 (missing: {}; not in the Freeman sky: {})",
+                list(want.difference(&have).copied().collect()),
+                list(have.difference(&want).copied().collect())
+            )));
+        }
+        let skyrefs = loaded
+            .freeman_material(&skyref::FreemanParams::default())
+            .map_err(|err| Error::input(format!("{name} is not Freeman-compatible: {err}")))?;
+        // The uniforms' defaults come from skyref on both sides; say so when FILE's own differ.
+        let own = skyrun::material_with_defaults(shader, &loaded.lowered, &[]).unwrap_or_default();
+        if skyrefs != own {
+            progress.note(&format!(
+                "note: {name}'s uniform defaults differ from the Freeman sky's; both the shader and skyref use the \
+                 Freeman sky's (skyref's) values"
+            ));
+        }
+        Ok(loaded)
+    }
 }

@@ -87,7 +87,7 @@ fn render(cx: &Context<'_>, v: &Variant<'_>) -> Result<(Vec<[f32; 4]>, Duration)
         time += r.gpu_time.unwrap_or(r.gpu_wait);
         images.push(r.pixels);
     }
-    let image = super::freeman::strip(images, cx.width, cx.height).map_err(Error::input)?;
+    let image = skyrun::Image::side_by_side(images, cx.width, cx.height).map_err(Error::input)?;
     Ok((image.pixels, time))
 }
 

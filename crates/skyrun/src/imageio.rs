@@ -35,6 +35,24 @@ impl Image {
         Ok(image)
     }
 
+    /// Same-sized views (`width × height` each, row 0 at the top) joined left to right: the
+    /// six faces of a cubemap as one 6×1 strip, in the order given.
+    pub fn side_by_side(views: Vec<Vec<[f32; 4]>>, width: u32, height: u32) -> Result<Self, ImageError> {
+        let n = views.len();
+        let (w, h) = (width as usize, height as usize);
+        let mut pixels = vec![[0.0; 4]; n * w * h];
+        for (i, view) in views.iter().enumerate() {
+            if view.len() != w * h {
+                return Err(ImageError::BadSize { width, height, pixels: view.len() });
+            }
+            for (y, row) in view.chunks_exact(w).enumerate() {
+                let at = y * n * w + i * w;
+                pixels[at..at + w].copy_from_slice(row);
+            }
+        }
+        Image::new(width * n as u32, height, pixels)
+    }
+
     /// The fields are public, so every writer checks again rather than trusting [`Image::new`].
     fn check(&self) -> Result<(), ImageError> {
         let expected = u64::from(self.width) * u64::from(self.height);
@@ -524,6 +542,17 @@ mod tests {
     use super::*;
     use exr::prelude::f16;
     use std::fs;
+
+    #[test]
+    fn views_side_by_side_keep_their_rows() {
+        let view = |v: f32| vec![[v, 0.0, 0.0, 1.0], [v, 1.0, 0.0, 1.0], [v, 0.0, 1.0, 1.0], [v, 1.0, 1.0, 1.0]];
+        let strip = Image::side_by_side(vec![view(0.0), view(1.0), view(2.0)], 2, 2).expect("same sizes");
+        assert_eq!((strip.width, strip.height), (6, 2));
+        let red: Vec<f32> = strip.pixels.iter().map(|p| p[0]).collect();
+        assert_eq!(red, [0.0, 0.0, 1.0, 1.0, 2.0, 2.0, 0.0, 0.0, 1.0, 1.0, 2.0, 2.0]);
+        assert_eq!(strip.pixels[7], [0.0, 1.0, 1.0, 1.0], "row 1 of the first view");
+        assert!(Image::side_by_side(vec![view(0.0), vec![[0.0; 4]; 3]], 2, 2).is_err(), "a short view");
+    }
 
     /// The names in `dir`, sorted.
     fn entries(dir: &Path) -> Vec<String> {
