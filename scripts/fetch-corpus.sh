@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Downloads the corpus shaders (tests/corpus/*.toml name each one's repository, path and commit)
 # from their own repositories into DIR, named as their sidecars, for
-#   GDSKY_CORPUS_DIR=DIR cargo test --test corpus -- --ignored
+#   GDSKY_CORPUS_DIR=DIR cargo test --test godot corpus -- --ignored
 # The shaders are not kept in gdsky's repository; see docs/corpus.md. Needs curl and network.
 set -euo pipefail
 dir=${1:?usage: bash scripts/fetch-corpus.sh DIR}

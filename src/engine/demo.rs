@@ -20,7 +20,7 @@ macro_rules! say {
 }
 
 /// The bound the pixel tests hold the converted Freeman sky to (see
-/// crates/skyrun/tests/freeman_matrix.rs for the argument): p99.9 relative error, floor 1e-4.
+/// crates/skyrun/tests/gpu/freeman_matrix.rs for the argument): p99.9 relative error, floor 1e-4.
 pub const P999_BOUND: f64 = 1e-3;
 pub const FLOOR: f32 = 1e-4;
 

@@ -405,7 +405,7 @@ fn a_noise_texture_2d_brings_its_mipmaps_as_in_godot() {
 #[test]
 fn the_mip_levels_are_godots_for_noise_textures() {
     // gdresource::generated::NoiseImage::mipmaps is compared byte for byte with Godot's own levels
-    // (tests/noise_oracle.rs); the levels skyrun binds must be the same bytes, for L8 noise
+    // (tests/godot/noise_oracle.rs); the levels skyrun binds must be the same bytes, for L8 noise
     // (expanded to RGBA) and for a colour-ramped RGBA8 one, odd sides included.
     let ramp = gdresource::generated::Gradient {
         offsets: vec![0.0, 1.0],

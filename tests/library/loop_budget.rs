@@ -1,6 +1,6 @@
 //! The loop-budget canary (`gdsky_naga::trace::loop_budget`, `gdsky::measure::any`): a module
 //! that reports, per pixel, whether the device ran every loop. lavapipe stops an invocation's
-//! loops after 65,535 passes in total (tests/lavapipe_loop_limit.rs, docs/lavapipe-loop-limit.md);
+//! loops after 65,535 passes in total (tests/cli/lavapipe_loop_limit.rs, docs/lavapipe-loop-limit.md);
 //! the canary must say so exactly where that happens, keep the shader's colour, and report
 //! nothing on a device without the limit. `bench`/`tune`'s sampling truth rejects a step the
 //! canary flags. Needs a Vulkan adapter (lavapipe is enough).
@@ -28,7 +28,7 @@ fn the_canary_flags_exactly_the_renders_whose_loops_were_cut() {
     let shot = Shot::panorama(10.0, 16, 8);
     let pixels = 16 * 8;
     // Well inside the budget (the canary's own two passes included) and well past it; the
-    // exact edge is tests/lavapipe_loop_limit.rs's business.
+    // exact edge is tests/cli/lavapipe_loop_limit.rs's business.
     for (passes, cut_on_llvmpipe) in [(1000, 0), (60_000, 0), (100_000, pixels)] {
         let variant = sky.variant(&[("PASSES".into(), passes)]).expect("the variant checks");
         let canary = variant.compile_canary(&gpu).expect("the canary compiles");

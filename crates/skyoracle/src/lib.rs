@@ -97,12 +97,12 @@
 //!   frame while another build ran). A trivial shader: 16 ms per frame at 64×32.
 //! * Without `--disable-frame-rate-limit`, headless Chromium paces WebGL frames at about 1 Hz
 //!   with no GPU (1 s per frame whatever is drawn); the driver passes it.
-//! * The integration tests (`tests/oracle.rs`, 10 tests sharing one oracle) took 36 s with other
+//! * The integration tests (`tests/godot/oracle.rs`, 10 tests sharing one oracle) took 36 s with other
 //!   builds running (15–25 s for the first 7 on a quieter machine).
 //!
 //! ## Conventions, as Godot 4.6's Compatibility renderer showed them
 //!
-//! Confirmed (tests in `tests/oracle.rs`):
+//! Confirmed (tests in `tests/godot/oracle.rs`):
 //! * EYEDIR = normalize(R_y(yaw) R_x(pitch) ((2(x+½)/W − 1)·t·W/H, (1 − 2(y+½)/H)·t, −1)),
 //!   t = tan(fov/2), row 0 at the top, yaw 0 pitch 0 looking toward −Z: within 2e−7, computed in
 //!   the shader from FRAGCOORD with the basis's sines and cosines from the CPU.
@@ -143,7 +143,7 @@
 //! w·h and non-finite texels. Texel (x, y) is `texels[y·w + x]`, which `texelFetch(t, ivec2(x,
 //! y), 0)` reads.
 //!
-//! Measured (`tests/oracle.rs`): the Compatibility renderer on WebGL2/SwiftShader keeps the
+//! Measured (`tests/godot/oracle.rs`): the Compatibility renderer on WebGL2/SwiftShader keeps the
 //! texels **bit for bit** through `texelFetch`. Four texels holding values no 16-bit float or
 //! 8-bit format can hold (0.1, π, 1.2345e−5, 123.456, 1e5, 1e−30, 3.4e38, −2.5, …) were
 //! compared inside the shader with their bit patterns (a `uint` array and `floatBitsToUint`): all

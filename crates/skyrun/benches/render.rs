@@ -3,7 +3,7 @@
 //! there is no GPU), side by side in one run.
 //!
 //! Same harness, size, scene, material and sample counts for both; the two render
-//! bit-identical images (`tests/hand_port.rs`). The time measured is the host's wall time from
+//! bit-identical images (`tests/gpu/hand_port.rs`). The time measured is the host's wall time from
 //! submitting the command buffer until the device is idle ([`skyrun::Rendered::gpu_wait`]),
 //! after a warm-up render that includes the driver's shader compilation; resource creation and
 //! read-back are outside it.

@@ -64,7 +64,7 @@
 //!
 //! ## What it measured
 //!
-//! The integration test `tests/freeman_lavapipe.rs` converts `fixtures/freeman_sky.gdshader`,
+//! The integration test `tests/gpu/freeman_lavapipe.rs` converts `fixtures/freeman_sky.gdshader`,
 //! renders it at 64×32 with the sun at 10° elevation and 30° azimuth and the camera 1 m above
 //! the ground, and compares with `skyref::f32::render` of the same scene (floor 1e-4). On
 //! lavapipe (llvmpipe, LLVM 15.0.6, Mesa 22.3.6):
@@ -75,8 +75,8 @@
 //! | camera, fov 90°, pitch 10° | 6.3e-7 | 4.6e-7 | 3.5e-7 | 1.1e-7 | 0 / 0 |
 //!
 //! The full scene matrix (sun −4° … 90°, camera at 1 m, 2 km and 30 km, both projections) is
-//! `tests/freeman_matrix.rs`, with its thresholds argued in its header; the sub-passes are
-//! tested in `tests/sub_passes.rs`; `benches/render.rs` times the converted shader against a
+//! `tests/gpu/freeman_matrix.rs`, with its thresholds argued in its header; the sub-passes are
+//! tested in `tests/gpu/sub_passes.rs`; `benches/render.rs` times the converted shader against a
 //! hand-written WGSL port.
 //!
 //! That is a few f32 ulps: far below the f32-versus-f64 difference skyref documents for the

@@ -32,7 +32,7 @@
 //! 1.1.0 (thirdparty/misc/FastNoiseLite.h), which rounds one step of the 3D OpenSimplex2 domain
 //! warp differently; that warp is computed here as 1.1.0 does (src/noise/warp3d.rs says why it
 //! matters). Godot's seamless path normalizes over two slices even for a 2D texture, which
-//! changes the codes in 3D space; that is matched too. `tests/noise_oracle.rs` compares the
+//! changes the codes in 3D space; that is matched too. `tests/godot/noise_oracle.rs` compares the
 //! result texel for texel with the images real Godot 4.6 generates (through crates/skyoracle):
 //! every one of its 88 configurations is identical, byte for byte (docs/noise.md).
 //!

@@ -10,7 +10,7 @@
 //! The conversions are `ShaderLanguage::convert_constant`'s: int → float, uint → float,
 //! int → uint when not negative, uint → int when at most 2³¹ − 1; never to or from bool.
 //!
-//! Measured against Godot 4.6 (tests/godot_frontend.rs): `sin(int(1))` and `vec2(1.0, int(2))`
+//! Measured against Godot 4.6 (tests/godot/godot_frontend.rs): `sin(int(1))` and `vec2(1.0, int(2))`
 //! are accepted, `uvec2(-1)` and `bvec2(1, 0)` are not; `uniform float f = 1;` is accepted,
 //! `uniform float f = 1.0 + 1.0;` and `uniform int i = int(1.5);` are not.
 

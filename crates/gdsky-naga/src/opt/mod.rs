@@ -4,7 +4,7 @@
 //! run on the module after lowering and before validation ([`crate::lower_with`], so every
 //! caller — `convert`, `render`, the benches, build scripts and tests — gets it), removes what no
 //! entry point needs and loads uniforms once, at function entry. It never changes a value the shader computes: the images of the Freeman
-//! sky stay bit-identical to the hand-written port (`crates/skyrun/tests/hand_port.rs`).
+//! sky stay bit-identical to the hand-written port (`crates/skyrun/tests/gpu/hand_port.rs`).
 //!
 //! * **Pruning** (`prune.rs`): functions no entry point calls are dropped; `let` values nothing
 //!   reads and constants no function reads lose their name (`uses.rs` finds what a function
