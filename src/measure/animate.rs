@@ -155,7 +155,7 @@ fn reuse_key(frame: &Frame, used: &dyn Fn(&str) -> bool, camera: bool) -> Vec<u8
             f32s(&mut key, &light.direction);
             f32s(&mut key, &light.color);
             f32s(&mut key, &[light.energy, light.size]);
-            key.push(u8::from(light.enabled));
+            key.push(u8::from(light.is_enabled()));
         }
     }
     if camera {

@@ -8,6 +8,7 @@ mod bench_cli;
 mod check;
 mod compare_stats;
 mod convert;
+mod cubemap;
 mod debanding;
 mod defects;
 mod depth_and_resolution;

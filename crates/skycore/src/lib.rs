@@ -24,6 +24,7 @@
 #![warn(missing_docs)]
 
 pub mod io;
+pub mod reflection;
 mod scene;
 mod texture;
 mod uniform;

@@ -265,8 +265,17 @@ impl FromStr for Projection {
 }
 
 /// The basis cube face `face` is rendered with (faces above 5 are taken as 5), as columns x, y,
-/// z: `Basis::looking_at(normal, up)` for the normals +X, −X, +Y, −Y, +Z, −Z with ups −Y, −Y,
-/// +Z, −Z, −Y, −Y, as Godot 4.3–4.5 render their radiance cube map.
+/// z, so that the camera formula with t = 1 gives every texel of the face the direction that
+/// cube sampling assigns it: `textureSample(cube, dir)` returns the sky in direction `dir`.
+///
+/// Godot renders its radiance faces with `Basis::looking_at(normal, up)` for the normals +X, −X,
+/// +Y, −Y, +Z, −Z with ups −Y, −Y, +Z, −Z, −Y, −Y, through a projection whose y is flipped (the
+/// RD renderer's `set_depth_correction(true)`), which lands each texel where Vulkan's cube
+/// convention (and wgpu's) samples it. The same here: `looking_at`'s y column negated. The
+/// result is a mirror, not a rotation (determinant −1): for face k with major axis m and texel
+/// centre (s, t) in [−1, 1]² (t growing down the rows), EYEDIR = normalize(m + s·x + t·(−y)),
+/// which is the table of the Vulkan specification's "Cube Map Face Selection":
+/// +X (1, −t, −s), −X (−1, −t, s), +Y (s, 1, t), −Y (s, −1, −t), +Z (s, −t, 1), −Z (−s, −t, −1).
 pub fn cube_face_basis(face: u8) -> DMat3 {
     let (target, up) = match face {
         0 => (DVec3::X, DVec3::NEG_Y),
@@ -278,7 +287,7 @@ pub fn cube_face_basis(face: u8) -> DMat3 {
     };
     let z = -target;
     let x = up.cross(z);
-    DMat3::from_cols(x, z.cross(x), z)
+    DMat3::from_cols(x, -z.cross(x), z)
 }
 
 /// Where the sky lies in depth: on the far plane, so that a depth test against geometry drawn
@@ -435,7 +444,29 @@ mod tests {
         for (face, axis) in axes.into_iter().enumerate() {
             let basis = cube_face_basis(face as u8);
             assert!((-basis.z_axis - axis).length() < 1e-15, "face {face}");
-            assert!((basis.determinant() - 1.0).abs() < 1e-12);
+            assert!((basis.determinant() + 1.0).abs() < 1e-12, "a mirror, as cube sampling is");
+        }
+    }
+
+    /// The Vulkan specification's cube face selection (table "Cube Map Face Selection", with
+    /// s = sc/|ma|, t = tc/|ma| at texel centres, row 0 at t = −1), written out independently.
+    #[test]
+    fn cube_face_texels_have_the_directions_vulkan_samples_them_at() {
+        let vulkan = |face: u8, s: f64, t: f64| match face {
+            0 => DVec3::new(1.0, -t, -s),
+            1 => DVec3::new(-1.0, -t, s),
+            2 => DVec3::new(s, 1.0, t),
+            3 => DVec3::new(s, -1.0, -t),
+            4 => DVec3::new(s, -t, 1.0),
+            _ => DVec3::new(-s, -t, -1.0),
+        };
+        for face in 0..6 {
+            let basis = cube_face_basis(face);
+            for (s, t) in [(-0.75, -0.75), (0.25, -0.5), (0.5, 0.75), (-0.25, 0.25)] {
+                // The camera formula with t = 1: basis · (s, −t, −1), u = (s+1)/2, v = (t+1)/2.
+                let ours = basis * DVec3::new(s, -t, -1.0);
+                assert!((ours - vulkan(face, s, t)).length() < 1e-15, "face {face} at ({s}, {t}): {ours}");
+            }
         }
     }
 }

@@ -39,6 +39,49 @@ pub enum UniformValue {
 }
 
 impl UniformValue {
+    /// Whether the value fits a uniform of the Godot type `type_name` as the reflection writes
+    /// it (`float`, `ivec3`, `float[4]`): the same type, or an int array for a `uint` array
+    /// (the elements travel as their bit patterns).
+    pub fn fits(&self, type_name: &str) -> bool {
+        match self {
+            UniformValue::FloatArray(v) => type_name == format!("float[{}]", v.len()),
+            UniformValue::IntArray(v) => {
+                type_name == format!("int[{}]", v.len()) || type_name == format!("uint[{}]", v.len())
+            }
+            other => type_name == other.type_name(),
+        }
+    }
+
+    /// Writes the value into a uniform block's `bytes` at `offset`, in the host's byte order
+    /// (little-endian on every wgpu platform): a `bool` as a `u32` 0 or 1, vectors as
+    /// consecutive components, array elements `stride` bytes apart. Components past the end of
+    /// `bytes` are not written.
+    pub fn write_into(&self, bytes: &mut [u8], offset: usize, stride: usize) {
+        let mut put = |at: usize, word: [u8; 4]| {
+            if let Some(slot) = bytes.get_mut(at..at + 4) {
+                slot.copy_from_slice(&word);
+            }
+        };
+        match self {
+            UniformValue::Float(v) => put(offset, v.to_ne_bytes()),
+            UniformValue::Int(v) => put(offset, v.to_ne_bytes()),
+            UniformValue::UInt(v) => put(offset, v.to_ne_bytes()),
+            UniformValue::Bool(v) => put(offset, u32::from(*v).to_ne_bytes()),
+            UniformValue::Vec2(v) => v.iter().enumerate().for_each(|(i, c)| put(offset + 4 * i, c.to_ne_bytes())),
+            UniformValue::Vec3(v) => v.iter().enumerate().for_each(|(i, c)| put(offset + 4 * i, c.to_ne_bytes())),
+            UniformValue::Vec4(v) => v.iter().enumerate().for_each(|(i, c)| put(offset + 4 * i, c.to_ne_bytes())),
+            UniformValue::IVec2(v) => v.iter().enumerate().for_each(|(i, c)| put(offset + 4 * i, c.to_ne_bytes())),
+            UniformValue::IVec3(v) => v.iter().enumerate().for_each(|(i, c)| put(offset + 4 * i, c.to_ne_bytes())),
+            UniformValue::IVec4(v) => v.iter().enumerate().for_each(|(i, c)| put(offset + 4 * i, c.to_ne_bytes())),
+            UniformValue::FloatArray(v) => {
+                v.iter().enumerate().for_each(|(i, c)| put(offset + stride * i, c.to_ne_bytes()))
+            }
+            UniformValue::IntArray(v) => {
+                v.iter().enumerate().for_each(|(i, c)| put(offset + stride * i, c.to_ne_bytes()))
+            }
+        }
+    }
+
     /// The Godot shading language type this value is written for (`float`, `ivec3`, `float[]`).
     pub fn type_name(&self) -> &'static str {
         match self {

@@ -112,8 +112,7 @@
 
 #![warn(missing_docs)]
 
-pub mod bindings;
-mod builtins;
+pub use skydraw::bindings;
 mod gpu;
 mod imageio;
 mod material;
@@ -124,7 +123,6 @@ mod skip;
 mod textures;
 mod wide;
 
-pub use builtins::{RenderPass, SkyBuiltins, SkyLight, offsets};
 pub use gdsky_naga::reflect::TextureBinding;
 pub use gpu::{AdapterSummary, Gpu, NoAdapter};
 pub use imageio::{
@@ -139,9 +137,10 @@ pub use material::{
 pub use metrics::{
     Metrics, PixelDiff, STATS_GRID, Stats, compare, compare_stats, luminance, region_stats, worst_pixels,
 };
-pub use render::{RenderError, Rendered, SkyShader, SubPasses, render, sub_pass_size};
+pub use render::{RenderError, Rendered, SkyShader, SubPasses, render};
 pub use skip::{MAX_MASK_BYTES, MaskError, OCCLUDED, Occluder, RenderOptions, SkyResolution, UpsampleFilter};
 pub use skycore::{Projection, Scene};
+pub use skydraw::{RenderPass, SkyBuiltins, SkyLight, offsets, sub_pass_size};
 pub use textures::{
     GODOT_VOLUME_GRID, MAX_ASSEMBLED_BYTES, MAX_TEXTURE_FILE_BYTES, MAX_TEXTURE_SIDE, MAX_VOLUME_SIDE, TexelFormat,
     TextureData, TextureError, TextureShape, check_texture, read_cube, read_texture, read_volume, texture_from_image,

@@ -4,7 +4,6 @@
 //! the same numbers the reflection JSON holds), so the bytes follow whatever layout naga gave
 //! the block. Each value is checked against the uniform's shader type before it is written.
 
-use crate::builtins::{put_f32s, put_i32, put_u32};
 use gdshader::check::types::{Scalar, Type};
 use gdsky_naga::{Lowered, MATERIAL_GROUP};
 use std::fmt;
@@ -36,26 +35,6 @@ fn fits(slot: &Type, given: &Type) -> bool {
     match (slot, given) {
         (Type::Array(s, n), Type::Array(g, m)) => n == m && (s == g || (**s == Type::UINT && **g == Type::INT)),
         _ => slot == given,
-    }
-}
-
-/// Writes `value` at `offset`; array elements `stride` bytes apart.
-fn write_value(value: &UniformValue, bytes: &mut [u8], offset: usize, stride: usize) {
-    match value {
-        UniformValue::Float(v) => put_f32s(bytes, offset, &[*v]),
-        UniformValue::Int(v) => put_i32(bytes, offset, *v),
-        UniformValue::UInt(v) => put_u32(bytes, offset, *v),
-        UniformValue::Bool(v) => put_u32(bytes, offset, u32::from(*v)),
-        UniformValue::Vec2(v) => put_f32s(bytes, offset, v),
-        UniformValue::Vec3(v) => put_f32s(bytes, offset, v),
-        UniformValue::Vec4(v) => put_f32s(bytes, offset, v),
-        UniformValue::IVec2(v) => v.iter().enumerate().for_each(|(i, c)| put_i32(bytes, offset + 4 * i, *c)),
-        UniformValue::IVec3(v) => v.iter().enumerate().for_each(|(i, c)| put_i32(bytes, offset + 4 * i, *c)),
-        UniformValue::IVec4(v) => v.iter().enumerate().for_each(|(i, c)| put_i32(bytes, offset + 4 * i, *c)),
-        UniformValue::FloatArray(v) => {
-            v.iter().enumerate().for_each(|(i, c)| put_f32s(bytes, offset + stride * i, &[*c]))
-        }
-        UniformValue::IntArray(v) => v.iter().enumerate().for_each(|(i, c)| put_i32(bytes, offset + stride * i, *c)),
     }
 }
 
@@ -118,7 +97,7 @@ pub fn material_bytes(lowered: &Lowered, values: &[(&str, UniformValue)]) -> Res
                 given: given.display(&[]).to_string(),
             });
         }
-        write_value(value, &mut bytes, slot.offset as usize, slot.stride.unwrap_or(0) as usize);
+        value.write_into(&mut bytes, slot.offset as usize, slot.stride.unwrap_or(0) as usize);
     }
     Ok(bytes)
 }
@@ -195,10 +174,10 @@ fn write_const(
             return;
         }
         match v.convert(s) {
-            Some(ConstValue::Float(f)) => put_f32s(bytes, at, &[f as f32]),
-            Some(ConstValue::Int(i)) => put_i32(bytes, at, i as i32),
-            Some(ConstValue::UInt(u)) => put_u32(bytes, at, u as u32),
-            Some(ConstValue::Bool(b)) => put_u32(bytes, at, u32::from(b)),
+            Some(ConstValue::Float(f)) => UniformValue::Float(f as f32).write_into(bytes, at, 0),
+            Some(ConstValue::Int(i)) => UniformValue::Int(i as i32).write_into(bytes, at, 0),
+            Some(ConstValue::UInt(u)) => UniformValue::UInt(u as u32).write_into(bytes, at, 0),
+            Some(ConstValue::Bool(b)) => UniformValue::Bool(b).write_into(bytes, at, 0),
             _ => {}
         }
     };

@@ -7,10 +7,10 @@
 //! one, then the full pass that can read both, then the copy to a read-back buffer.
 
 use crate::bindings::{self, Binding, BindingError, BindingKind};
-use crate::builtins::{RenderPass, SkyBuiltins};
 use crate::gpu::Gpu;
 use crate::skip::{OCCLUDED, Occluder, RenderOptions, SkyResolution, UPSAMPLE_WGSL, UpsampleFilter};
 use skycore::Projection;
+use skydraw::{RenderPass, SkyBuiltins, sub_pass_size};
 use std::collections::HashMap;
 use std::fmt;
 use std::sync::{Mutex, mpsc};
@@ -123,17 +123,6 @@ impl SubPasses {
             quarter: modes.iter().any(|m| m == "use_quarter_res_pass"),
         }
     }
-}
-
-/// The size of a sub-pass target for a screen: Godot divides by 2 or 4 and keeps each side
-/// at least 4 pixels.
-pub fn sub_pass_size(pass: RenderPass, width: u32, height: u32) -> (u32, u32) {
-    let divisor = match pass {
-        RenderPass::Half => 2,
-        RenderPass::Quarter => 4,
-        _ => 1,
-    };
-    ((width / divisor).max(4), (height / divisor).max(4))
 }
 
 /// One render's pixels and how long the GPU took.
@@ -387,7 +376,7 @@ impl SkyShader {
         // under any mipmap filter, Godot's default one included.
         let slot = self.material_textures.iter().find(|t| t.name == name);
         let mipmaps = slot.is_some_and(|t| t.wants_mipmaps() || (data.mipmapped() && t.filter.contains("mipmap")));
-        let view = scoped(gpu, || crate::textures::upload(gpu, name, data, mipmaps))
+        let view = scoped(gpu, || crate::textures::upload(&gpu.device, &gpu.queue, name, data, mipmaps))
             .map_err(|e| crate::TextureError::Wgpu(e.to_string()))?;
         self.provided.insert(key, view);
         Ok(())
@@ -549,8 +538,11 @@ impl SkyShader {
         let face_builtins;
         let builtins = match projection {
             Projection::CubeFace(face) => {
-                face_builtins =
-                    SkyBuiltins { cube_face: u32::from(face.min(5)), render_pass: RenderPass::Cubemap, ..*builtins };
+                face_builtins = SkyBuiltins {
+                    cube_face: u32::from(face.min(5)),
+                    render_pass: RenderPass::Cubemap.code(),
+                    ..*builtins
+                };
                 &face_builtins
             }
             _ => builtins,
@@ -640,7 +632,7 @@ impl SkyShader {
         let (width, height) = options.resolution.shaded_size(width, height);
         let reduced = options.resolution != SkyResolution::Full;
         let scaled_builtins;
-        let builtins = if reduced && builtins.render_pass != RenderPass::Cubemap {
+        let builtins = if reduced && builtins.render_pass != RenderPass::Cubemap.code() {
             scaled_builtins = SkyBuiltins { screen_size: [width as f32, height as f32], ..*builtins };
             &scaled_builtins
         } else {
@@ -686,7 +678,7 @@ impl SkyShader {
             let (w, h) = sub_pass_size(pass, width, height);
             let target = render_target(gpu, w, h, SUB_PASS_FORMAT, wgpu::TextureUsages::TEXTURE_BINDING);
             let view = target.create_view(&wgpu::TextureViewDescriptor::default());
-            let sub = SkyBuiltins { screen_size: [w as f32, h as f32], render_pass: pass, ..*builtins };
+            let sub = SkyBuiltins { screen_size: [w as f32, h as f32], render_pass: pass.code(), ..*builtins };
             let groups =
                 self.bind_groups(gpu, &sub, material_buffer.as_ref(), half_view.as_ref(), quarter_view.as_ref());
             let target =
@@ -827,7 +819,7 @@ impl SkyShader {
                         // default); a sub-pass texture not rendered is white; a material
                         // texture gets its hint's default (white without one), as in Godot.
                         None => {
-                            let cube = builtins.render_pass == RenderPass::Cubemap;
+                            let cube = builtins.render_pass == RenderPass::Cubemap.code();
                             let black = sky && (binding == 0 || cube);
                             let hinted = self.texture_defaults.iter().find(|(key, _)| *key == (b.group, binding));
                             let value = match hinted {
@@ -835,7 +827,13 @@ impl SkyShader {
                                 Some((_, texel)) => *texel,
                                 None => [1.0; 4],
                             };
-                            Resource::View(bindings::constant_texture(gpu, dimension, sample_type, value))
+                            Resource::View(bindings::constant_texture(
+                                &gpu.device,
+                                &gpu.queue,
+                                dimension,
+                                sample_type,
+                                value,
+                            ))
                         }
                     },
                 };

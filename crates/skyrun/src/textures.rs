@@ -17,6 +17,19 @@ pub use layout::{GODOT_VOLUME_GRID, MAX_ASSEMBLED_BYTES, read_cube, read_volume}
 
 use crate::imageio::{Image, decode_exr};
 pub use skycore::{MAX_TEXTURE_SIDE, MAX_VOLUME_SIDE, TexelFormat, TextureData, TextureError, TextureShape};
+pub(crate) use skydraw::textures::{sampler, upload};
+
+/// [`skydraw::textures::check_texture`] with the texture slots of a lowered module's
+/// reflection ([`gdsky_naga::reflect::texture_bindings`]).
+pub fn check_texture(
+    bindings: &[crate::bindings::Binding],
+    textures: &[gdsky_naga::reflect::TextureBinding],
+    name: &str,
+    data: &TextureData,
+) -> Result<Option<(u32, u32)>, TextureError> {
+    let slots: Vec<(String, u32, u32)> = textures.iter().map(|t| (t.name.clone(), t.group, t.binding)).collect();
+    skydraw::textures::check_texture(bindings, &slots, name, data)
+}
 use std::io::Cursor;
 use std::path::Path;
 
@@ -24,16 +37,6 @@ use std::path::Path;
 /// [`MAX_TEXTURE_SIDE`]² (1 GiB) plus 64 MiB for headers and other channels. A larger file is
 /// refused unread.
 pub const MAX_TEXTURE_FILE_BYTES: u64 = (MAX_TEXTURE_SIDE as u64) * (MAX_TEXTURE_SIDE as u64) * 16 + (64 << 20);
-
-/// The wgpu format of a texel format.
-pub(crate) fn wgpu_format(format: TexelFormat) -> wgpu::TextureFormat {
-    match format {
-        TexelFormat::Rgba32Float => wgpu::TextureFormat::Rgba32Float,
-        TexelFormat::Rgba16Float => wgpu::TextureFormat::Rgba16Float,
-        TexelFormat::Rgba8Unorm => wgpu::TextureFormat::Rgba8Unorm,
-        TexelFormat::Rgba8UnormSrgb => wgpu::TextureFormat::Rgba8UnormSrgb,
-    }
-}
 
 /// An f32 RGBA image as a [`TexelFormat::Rgba32Float`] texture, bit for bit.
 pub fn texture_from_image(image: &Image) -> Result<TextureData, TextureError> {
@@ -123,130 +126,6 @@ pub fn read_texture(path: &Path, srgb: bool) -> Result<TextureData, TextureError
         return TextureData::new(w, h, format, rgba).map_err(|e| decode(e.to_string()));
     }
     Err(decode("neither an OpenEXR nor a PNG file (its first bytes are neither signature)".into()))
-}
-
-/// Checks that `data` can be given to the material texture `name` of a module
-/// with `bindings` ([`crate::bindings::discover`]) and `textures` (the reflection's,
-/// [`gdsky_naga::reflect::texture_bindings`]), without a device: what
-/// [`crate::SkyShader::set_texture`] checks, for a host that wants to refuse a texture before it
-/// opens the GPU. Returns the texture's (group, binding), or `None` when the module does not
-/// declare it (the shader never reads the uniform, and the binding was pruned).
-///
-/// Errors: a name that is not a material texture (the message lists the shader's);
-/// [`TexelFormat::Rgba32Float`] for a texture the shader samples with filtering (a texture it
-/// reads only with `texelFetch` is declared non-filterable, see [`crate::bindings::discover`]);
-/// a texture whose [`TextureShape`] is not the binding's (a 2D image for a `samplerCube`);
-/// a binding that is no float 2D, cube or 3D texture (arrays and integer textures cannot be
-/// given yet).
-pub fn check_texture(
-    bindings: &[crate::bindings::Binding],
-    textures: &[gdsky_naga::reflect::TextureBinding],
-    name: &str,
-    data: &TextureData,
-) -> Result<Option<(u32, u32)>, TextureError> {
-    let Some(slot) = textures.iter().find(|t| t.name == name) else {
-        return Err(TextureError::UnknownName {
-            name: name.to_string(),
-            known: textures.iter().map(|t| t.name.clone()).collect(),
-        });
-    };
-    let key = (slot.group, slot.binding);
-    let Some(binding) = bindings.iter().find(|b| (b.group, b.binding) == key) else {
-        return Ok(None);
-    };
-    let unsupported = |what: &str| TextureError::Unsupported { name: name.to_string(), what: what.to_string() };
-    let crate::bindings::BindingKind::Texture { dimension, sample_type } = binding.kind else {
-        return Err(unsupported("its binding is not a texture"));
-    };
-    let expected = match dimension {
-        wgpu::TextureViewDimension::D2 => TextureShape::D2,
-        wgpu::TextureViewDimension::Cube => TextureShape::Cube,
-        wgpu::TextureViewDimension::D3 => TextureShape::D3,
-        _ => {
-            return Err(unsupported(&format!(
-                "a {dimension:?} texture; only 2D, cube and 3D textures (sampler2D, samplerCube, sampler3D) can be \
-                 given so far"
-            )));
-        }
-    };
-    if data.shape() != expected {
-        return Err(TextureError::WrongShape { name: name.to_string(), expected, given: data.shape() });
-    }
-    let wgpu::TextureSampleType::Float { filterable } = sample_type else {
-        return Err(unsupported(
-            "an integer texture (isampler2D, usampler2D); only float textures can be given so far",
-        ));
-    };
-    if filterable && !data.format().filterable() {
-        return Err(TextureError::NotFilterable { name: name.to_string() });
-    }
-    Ok(Some(key))
-}
-
-/// The sampler Godot's hints ask for (the reflection's `filter` and `repeat`): `nearest*`
-/// filters take the nearest texel, the others interpolate; `*_mipmap*` filters blend the two
-/// nearest mip levels, nearest texel or not, as Godot does with its project setting
-/// `rendering/textures/default_filters/use_nearest_mipmap_filter` at its default (false);
-/// the other filters read one level (the texture has only one: mipmaps are generated only
-/// for a `*_mipmap*` hint, [`gdsky_naga::reflect::TextureBinding::wants_mipmaps`]); anisotropy is not applied; `repeat` wraps in
-/// u, v and w, otherwise clamps to the edge.
-pub(crate) fn sampler(device: &wgpu::Device, filter: &str, repeat: bool) -> wgpu::Sampler {
-    let nearest = filter.starts_with("nearest");
-    let texel = if nearest { wgpu::FilterMode::Nearest } else { wgpu::FilterMode::Linear };
-    let mip = if filter.contains("mipmap") { wgpu::MipmapFilterMode::Linear } else { wgpu::MipmapFilterMode::Nearest };
-    let address = if repeat { wgpu::AddressMode::Repeat } else { wgpu::AddressMode::ClampToEdge };
-    device.create_sampler(&wgpu::SamplerDescriptor {
-        label: Some("material sampler"),
-        address_mode_u: address,
-        address_mode_v: address,
-        address_mode_w: address,
-        mag_filter: texel,
-        min_filter: texel,
-        mipmap_filter: mip,
-        ..Default::default()
-    })
-}
-
-/// Creates the GPU texture of `data` (a 2D texture, a six-layer 2D texture viewed as a cube, or
-/// a 3D texture) with its mip chain when `mipmaps` ([`TextureData::mip_levels`]), and returns the view a
-/// material binding takes. Validation errors surface through the caller's error scope.
-pub(crate) fn upload(gpu: &crate::Gpu, label: &str, data: &TextureData, mipmaps: bool) -> wgpu::TextureView {
-    let levels = if mipmaps { data.mip_levels() } else { Vec::new() };
-    let (dimension, view) = match data.shape() {
-        TextureShape::D2 => (wgpu::TextureDimension::D2, wgpu::TextureViewDimension::D2),
-        TextureShape::Cube => (wgpu::TextureDimension::D2, wgpu::TextureViewDimension::Cube),
-        TextureShape::D3 => (wgpu::TextureDimension::D3, wgpu::TextureViewDimension::D3),
-    };
-    let size = wgpu::Extent3d { width: data.width(), height: data.height(), depth_or_array_layers: data.layers() };
-    let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some(label),
-        size,
-        mip_level_count: 1 + levels.len() as u32,
-        sample_count: 1,
-        dimension,
-        format: wgpu_format(data.format()),
-        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-        view_formats: &[],
-    });
-    let bpt = data.format().bytes_per_texel();
-    for (mip_level, level) in std::iter::once(data).chain(&levels).enumerate() {
-        gpu.queue.write_texture(
-            wgpu::TexelCopyTextureInfo {
-                texture: &texture,
-                mip_level: mip_level as u32,
-                origin: wgpu::Origin3d::ZERO,
-                aspect: wgpu::TextureAspect::All,
-            },
-            level.bytes(),
-            wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(level.width() * bpt),
-                rows_per_image: Some(level.height()),
-            },
-            wgpu::Extent3d { width: level.width(), height: level.height(), depth_or_array_layers: level.layers() },
-        );
-    }
-    texture.create_view(&wgpu::TextureViewDescriptor { dimension: Some(view), ..Default::default() })
 }
 
 #[cfg(test)]

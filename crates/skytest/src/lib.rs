@@ -133,6 +133,30 @@ pub fn converted_freeman() -> (gdshader::FrontendOutput, gdsky_naga::Lowered, St
     (front, lowered, wgsl)
 }
 
+/// A shader's text checked, lowered at the default options, written as WGSL and reflected:
+/// what `gdsky::convert` gives, without the root crate.
+pub struct Converted {
+    /// The front end's output.
+    pub front: gdshader::FrontendOutput,
+    /// The validated module.
+    pub lowered: gdsky_naga::Lowered,
+    /// Its WGSL.
+    pub wgsl: String,
+    /// Its reflection.
+    pub reflection: skycore::reflection::Reflection,
+}
+
+/// Converts `source` (named `name`); panics with the diagnostics when it does not convert.
+pub fn convert(name: &str, source: &str) -> Converted {
+    let front = gdshader::check_source(name, source.as_bytes().to_vec(), None, &mut gdshader::FsLoader);
+    let Some(shader) = front.shader.as_ref() else { panic!("{name} does not check: {:?}", front.diagnostics) };
+    let lowered = gdsky_naga::lower(&front, &gdsky_naga::LowerOptions::default())
+        .unwrap_or_else(|d| panic!("{name} does not lower: {d:?}"));
+    let wgsl = gdsky_naga::to_wgsl(&lowered).unwrap_or_else(|e| panic!("{name}: WGSL: {e:?}"));
+    let reflection = gdsky_naga::reflect::reflection(name, shader, &lowered);
+    Converted { front, lowered, wgsl, reflection }
+}
+
 /// A camera and sun, given to gdsky and to Godot each in its own terms.
 #[derive(Clone, Copy, Debug)]
 pub struct SetUp {
@@ -208,5 +232,98 @@ pub fn oracle() -> MutexGuard<'static, skyoracle::Oracle> {
     match started {
         Ok(oracle) => oracle.lock().unwrap_or_else(|poisoned| poisoned.into_inner()),
         Err(message) => panic!("this test needs the Godot oracle: {message}"),
+    }
+}
+
+/// Cube maps held to cube sampling: 26 directions, three asymmetric skies with their values in
+/// Rust, and the tolerance a sampled cube of a given face size can be held to.
+pub mod cube {
+    use glam::DVec3;
+
+    /// The six axes, the twelve edge midpoints and the eight corners of the cube, normalised:
+    /// every face, every seam and every corner, where a flipped or rotated face shows.
+    pub fn directions() -> Vec<DVec3> {
+        let mut out = Vec::new();
+        for x in -1..=1 {
+            for y in -1..=1 {
+                for z in -1..=1 {
+                    if (x, y, z) != (0, 0, 0) {
+                        out.push(DVec3::new(f64::from(x), f64::from(y), f64::from(z)).normalize());
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// A sky whose colour is a known function of EYEDIR.
+    pub struct Sky {
+        /// A name for messages and files.
+        pub name: &'static str,
+        /// The sky shader (Godot shading language).
+        pub source: &'static str,
+        /// Its colour along a unit direction, computed in f64.
+        pub color: fn(DVec3) -> [f64; 3],
+    }
+
+    /// Three skies no reflection or rotation leaves unchanged: each channel a different
+    /// function of the direction's components.
+    pub const SKIES: [Sky; 3] = [
+        Sky {
+            name: "axes",
+            source: "shader_type sky;\nvoid sky() { COLOR = EYEDIR * 0.5 + 0.5; }\n",
+            color: |d| [0.5 * d.x + 0.5, 0.5 * d.y + 0.5, 0.5 * d.z + 0.5],
+        },
+        Sky {
+            name: "products",
+            source: "shader_type sky;\nvoid sky() {\n    COLOR = vec3(0.5 + 0.5 * EYEDIR.x * EYEDIR.z, \
+                     0.5 + 0.25 * (EYEDIR.y + EYEDIR.x), 0.5 + 0.4 * EYEDIR.y * EYEDIR.z - 0.1 * EYEDIR.x);\n}\n",
+            color: |d| [0.5 + 0.5 * d.x * d.z, 0.5 + 0.25 * (d.y + d.x), 0.5 + 0.4 * d.y * d.z - 0.1 * d.x],
+        },
+        Sky {
+            name: "lobe",
+            source: "shader_type sky;\nvoid sky() {\n    float s = max(dot(EYEDIR, normalize(vec3(0.3, 0.5, -0.8))), 0.0);\n    \
+                     COLOR = vec3(s * s, s, 0.2 + 0.3 * EYEDIR.x);\n}\n",
+            color: |d| {
+                let s = d.dot(DVec3::new(0.3, 0.5, -0.8).normalize()).max(0.0);
+                [s * s, s, 0.2 + 0.3 * d.x]
+            },
+        },
+    ];
+
+    /// What linear sampling of a cube with `face` texels a side may differ from the sky at
+    /// `dir`: the most the sky changes within 1.5 texels of `dir` (the texel centres a sample
+    /// blends lie within a texel's diagonal; a texel spans at most 2/face in the face plane,
+    /// which is at least as far as the sphere), over 64 directions around it, plus f32
+    /// rounding. A flipped face moves a sample by up to the whole face.
+    pub fn tolerance(sky: &Sky, dir: DVec3, face: u32) -> f64 {
+        let reach = 1.5 * 2.0 / f64::from(face);
+        let (u, v) = dir.any_orthonormal_pair();
+        let at = (sky.color)(dir);
+        let mut most: f64 = 0.0;
+        for k in 0..64 {
+            let angle = f64::from(k) * std::f64::consts::TAU / 64.0;
+            let near = (dir + reach * (angle.cos() * u + angle.sin() * v)).normalize();
+            let there = (sky.color)(near);
+            for c in 0..3 {
+                most = most.max((there[c] - at[c]).abs());
+            }
+        }
+        most + 1e-5
+    }
+
+    /// A sky shader that writes the cube `env` sampled along [`directions`] into a
+    /// `directions().len()`×1 panorama, pixel i for direction i.
+    pub fn probe_source() -> String {
+        let dirs = directions();
+        let list: Vec<String> = dirs.iter().map(|d| format!("vec3({:.9}, {:.9}, {:.9})", d.x, d.y, d.z)).collect();
+        format!(
+            "shader_type sky;\nuniform samplerCube env : filter_linear;\nconst vec3 DIRS[{n}] = vec3[{n}]({});\n\
+             void sky() {{\n    int i = clamp(int(SKY_COORDS.x * {n}.0), 0, {last});\n    \
+             COLOR = texture(env, DIRS[i]).rgb;\n}}\n",
+            list.join(", "),
+            n = dirs.len(),
+            last = dirs.len() - 1
+        )
     }
 }

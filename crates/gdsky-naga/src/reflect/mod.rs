@@ -5,9 +5,7 @@
 //! uniforms' defaults, hints, group paths and docs, the built-ins the shader uses, its render
 //! modes, the passes it needs, and when Godot would re-render it.
 
-mod model;
-
-pub use model::{
+pub use skycore::reflection::{
     Bindings, Block, BuiltinsBlock, Depth, EntryPoints, HintEntry, MaterialBlock, OverrideEntry, Reflection,
     SamplerEntry, SkyTextureEntry, TextureEntry, UniformEntry, Update,
 };
@@ -183,6 +181,8 @@ pub fn reflection(name: &str, shader: &CheckedShader, lowered: &Lowered) -> Refl
         on_material: true,
         process_mode: process_mode.into(),
     };
+    let builtins = struct_layout(&lowered.module, "SkyBuiltins");
+    let light = struct_layout(&lowered.module, "SkyLight");
     Reflection {
         shader: name.to_string(),
         entry_points: EntryPoints {
@@ -196,6 +196,10 @@ pub fn reflection(name: &str, shader: &CheckedShader, lowered: &Lowered) -> Refl
                 struct_name: "SkyBuiltins".into(),
                 fields: BUILTIN_FIELDS.iter().map(|f| f.to_string()).collect(),
                 light_fields: LIGHT_FIELDS.iter().map(|f| f.to_string()).collect(),
+                offsets: builtins.offsets,
+                size: builtins.size,
+                light_offsets: light.offsets,
+                light_stride: light.size,
             },
             material: MaterialBlock {
                 group: MATERIAL_GROUP,
@@ -238,6 +242,26 @@ pub fn reflection(name: &str, shader: &CheckedShader, lowered: &Lowered) -> Refl
         passes,
         update,
     }
+}
+
+/// A struct's size and its members' offsets, as naga laid the module's struct `name` out.
+struct StructLayout {
+    size: u32,
+    offsets: std::collections::BTreeMap<String, u32>,
+}
+
+fn struct_layout(module: &naga::Module, name: &str) -> StructLayout {
+    module
+        .types
+        .iter()
+        .find_map(|(_, ty)| match &ty.inner {
+            naga::TypeInner::Struct { members, span } if ty.name.as_deref() == Some(name) => Some(StructLayout {
+                size: *span,
+                offsets: members.iter().filter_map(|m| Some((m.name.clone()?, m.offset))).collect(),
+            }),
+            _ => None,
+        })
+        .unwrap_or(StructLayout { size: 0, offsets: Default::default() })
 }
 
 /// The module's overrides (`--override NAME`): name, `@id` (the key of a pipeline constant),

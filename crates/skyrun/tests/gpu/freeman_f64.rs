@@ -55,7 +55,7 @@ fn reference(params: &FreemanParams, scene: &Scene, builtins: &SkyBuiltins, widt
         for x in 0..width {
             let eyedir = skyref::f64::eyedir(scene, Projection::Panorama, x, y, width, height);
             let inputs = skyref::f64::SkyInputs {
-                light0_enabled: builtins.lights[0].enabled,
+                light0_enabled: builtins.lights[0].is_enabled(),
                 light0_direction: DVec3::new(l[0].into(), l[1].into(), l[2].into()),
                 position: DVec3::new(p[0].into(), p[1].into(), p[2].into()),
                 eyedir,

@@ -1,11 +1,11 @@
-//! What a shader binds, read from its WGSL, and what the harness binds in its place.
+//! What a shader binds, read from its WGSL, and what stands in for what nobody gives.
 //!
-//! The harness does not trust a hand-written list of bindings: it parses the WGSL with naga and
-//! reads every resource the module declares (group, binding, kind, size). That way the same
-//! code renders gdsky's converted modules, whatever subset of the sky textures they declare, and
-//! hand-written WGSL with the same interface (the bench's port). The layouts it builds are
-//! explicit, so a binding the harness cannot provide is an error with its name, not a silently
-//! different pipeline.
+//! The runtime (and the test harness built on it) does not trust a hand-written list of
+//! bindings: it parses the WGSL with naga and reads every resource the module declares (group,
+//! binding, kind, size). That way the same code draws gdsky's converted modules, whatever subset
+//! of the sky textures they declare, and hand-written WGSL with the same interface. The layouts
+//! built from them are explicit, so a binding that cannot be provided is an error with its
+//! name, not a silently different pipeline.
 
 use std::fmt;
 
@@ -58,12 +58,12 @@ pub enum BindingKind {
     Sampler,
 }
 
-/// Why the harness cannot bind a shader's resources.
+/// Why a shader's resources cannot be bound.
 #[derive(Clone, Debug, PartialEq)]
 pub enum BindingError {
     /// The WGSL does not parse (naga's message).
     Parse(String),
-    /// A resource the harness has no stand-in for (storage buffers, storage or depth textures,
+    /// A resource nothing stands in for (storage buffers, storage or depth textures,
     /// binding arrays, comparison samplers, an unexpected group).
     Unsupported {
         /// The variable's name.
@@ -78,7 +78,7 @@ impl fmt::Display for BindingError {
         match self {
             BindingError::Parse(m) => write!(f, "the WGSL does not parse: {m}"),
             BindingError::Unsupported { name, what } => {
-                write!(f, "the harness cannot bind `{name}`: {what}")
+                write!(f, "cannot bind `{name}`: {what}")
             }
         }
     }
@@ -282,7 +282,7 @@ fn describe(
 }
 
 /// The layout entry for one binding.
-pub(crate) fn layout_entry(binding: &Binding) -> wgpu::BindGroupLayoutEntry {
+pub fn layout_entry(binding: &Binding) -> wgpu::BindGroupLayoutEntry {
     let ty = match binding.kind {
         BindingKind::Uniform { size } => wgpu::BindingType::Buffer {
             ty: wgpu::BufferBindingType::Uniform,
@@ -304,8 +304,9 @@ pub(crate) fn layout_entry(binding: &Binding) -> wgpu::BindGroupLayoutEntry {
 
 /// A 1×1 texture (six layers for a cube) filled with one texel, standing in for a texture the
 /// scene does not provide. `value` is RGBA in the texture's sample type.
-pub(crate) fn constant_texture(
-    gpu: &crate::Gpu,
+pub fn constant_texture(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
     dimension: wgpu::TextureViewDimension,
     sample_type: wgpu::TextureSampleType,
     value: [f32; 4],
@@ -326,7 +327,7 @@ pub(crate) fn constant_texture(
         _ => (wgpu::TextureDimension::D2, 1),
     };
     let size = wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: layers };
-    let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
+    let texture = device.create_texture(&wgpu::TextureDescriptor {
         label: Some("stand-in texture"),
         size,
         mip_level_count: 1,
@@ -337,7 +338,7 @@ pub(crate) fn constant_texture(
         view_formats: &[],
     });
     let data: Vec<u8> = (0..layers).flat_map(|_| texel.iter().copied()).collect();
-    gpu.queue.write_texture(
+    queue.write_texture(
         texture.as_image_copy(),
         &data,
         wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(texel.len() as u32), rows_per_image: Some(1) },

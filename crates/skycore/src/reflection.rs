@@ -1,5 +1,8 @@
-//! The reflection as Rust types: what `gdsky convert` writes as `<stem>.json` and what a host
-//! reads back (serde in both directions), field for field.
+//! The reflection of a converted shader as Rust types: what `gdsky convert` writes as
+//! `<stem>.json`, what the converter returns (`gdsky_naga::reflect::reflection` fills it) and
+//! what a host or a runtime reads back (serde in both directions), field for field. It lives on
+//! the ground floor because both sides speak it: the converter writes it, the runtime that
+//! draws a converted sky reads it without the converter.
 //!
 //! Fields are declared in the order the JSON lists them (alphabetical, as the format has always
 //! been written), so the file is the same whether it was written from these types or read and
@@ -65,6 +68,14 @@ pub struct BuiltinsBlock {
     pub group: u32,
     /// Member names of `SkyLight`, in order.
     pub light_fields: Vec<String>,
+    /// Byte offset of each `SkyLight` member in one light, as naga laid the struct out.
+    pub light_offsets: BTreeMap<String, u32>,
+    /// Byte stride of the `lights` array (the size of `SkyLight`).
+    pub light_stride: u32,
+    /// Byte offset of each member, as naga laid the struct out (WGSL's uniform rules).
+    pub offsets: BTreeMap<String, u32>,
+    /// Size of the block in bytes.
+    pub size: u32,
     /// The WGSL struct's name.
     #[serde(rename = "struct")]
     pub struct_name: String,
@@ -243,4 +254,12 @@ pub struct Update {
     /// Godot's AUTOMATIC process mode for a radiance size of 256: `realtime`, `incremental` or
     /// `quality`.
     pub process_mode: String,
+}
+
+impl Reflection {
+    /// Reads a reflection from its JSON (the `.json` file `gdsky convert` and the build script
+    /// write).
+    pub fn from_json(text: &str) -> Result<Self, serde_json::Error> {
+        serde_json::from_str(text)
+    }
 }
