@@ -423,19 +423,7 @@ impl Radiance {
         view: &wgpu::TextureView,
         bind: impl FnOnce(&mut wgpu::RenderPass<'_>),
     ) {
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("sky radiance"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Store },
-            })],
-            depth_stencil_attachment: None,
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
+        let mut pass = crate::sky::begin_offscreen_pass(encoder, view, "sky radiance");
         pass.set_pipeline(pipeline);
         bind(&mut pass);
         pass.draw(0..3, 0..1);

@@ -724,19 +724,7 @@ impl Sky {
         family: Family,
         view: &wgpu::TextureView,
     ) {
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("sky sub-pass"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Store },
-            })],
-            depth_stencil_attachment: None,
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
+        let mut pass = begin_offscreen_pass(encoder, view, "sky sub-pass");
         pass.set_pipeline(pipeline);
         self.set_groups(&mut pass, slot, family);
         pass.draw(0..3, 0..1);
@@ -895,6 +883,28 @@ impl Sky {
             entries: &entries,
         }))
     }
+}
+
+/// A pass into one of the runtime's own targets (a sub-pass, a radiance face or mip), cleared
+/// to black first, without depth.
+pub(crate) fn begin_offscreen_pass<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    view: &wgpu::TextureView,
+    label: &str,
+) -> wgpu::RenderPass<'e> {
+    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some(label),
+        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+            view,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Store },
+        })],
+        depth_stencil_attachment: None,
+        timestamp_writes: None,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    })
 }
 
 /// A render pipeline of the sky module: the fullscreen triangle of `vs_main` and one fragment
