@@ -35,7 +35,7 @@
 
 use gdsky::frontend as gdshader;
 use gdsky::frontend::check::types::Type;
-use skyoracle::{Job, Oracle, OracleError, OracleImage, Parameter};
+use skyoracle::{Oracle, OracleError, OracleImage, Parameter};
 use skyref::{Projection, Scene};
 use skyrun::{Gpu, SkyBuiltins, SkyShader, SubPasses, material_with_defaults, texture_defaults};
 use std::collections::BTreeSet;
@@ -471,51 +471,7 @@ const PARITY_SETS: &[(&str, &[(&str, &str)])] = &[
     ("marble__sky", &[("overwritten_time", "1.5")]),
 ];
 
-/// A camera and sun, given to both renderers in their own terms (tests/godot/godot_parity.rs's two).
-struct SetUp {
-    name: &'static str,
-    fov_deg: f64,
-    yaw_deg: f64,
-    pitch_deg: f64,
-    altitude_m: f64,
-    sun: (f64, f64),
-}
-
-const SET_UPS: [SetUp; 2] = [
-    SetUp {
-        name: "toward -Z, sun 10°",
-        fov_deg: 90.0,
-        yaw_deg: 0.0,
-        pitch_deg: 0.0,
-        altitude_m: 1.0,
-        sun: (10.0, 0.0),
-    },
-    SetUp {
-        name: "yaw 120° pitch 35°, sun 35°/150°",
-        fov_deg: 60.0,
-        yaw_deg: 120.0,
-        pitch_deg: 35.0,
-        altitude_m: 500.0,
-        sun: (35.0, 150.0),
-    },
-];
-
-impl SetUp {
-    fn scene(&self) -> Scene {
-        Scene::default()
-            .with_sun(self.sun.0, self.sun.1)
-            .with_position(glam::DVec3::new(0.0, self.altitude_m, 0.0))
-            .with_fov(self.fov_deg)
-            .with_view(self.yaw_deg, self.pitch_deg)
-    }
-
-    fn job(&self, code: &str, uniforms: &[(String, Parameter)]) -> Job {
-        let mut job = Job::new(code, PARITY_SIZE.0, PARITY_SIZE.1);
-        job.scene = self.scene();
-        job.uniforms = uniforms.to_vec();
-        job
-    }
-}
+use skytest::SET_UPS;
 
 /// Per-channel relative errors of gdsky's image against Godot's, and their summary.
 #[derive(Debug, Default, Clone, Copy)]
@@ -697,7 +653,7 @@ fn parity(gpu: &Gpu, oracle: &mut Oracle, entry: &Entry) -> ParityRow {
             .collect();
         let mut renders = Vec::new();
         for set_up in &SET_UPS {
-            let godot = match oracle.render(&set_up.job(&code, &uniforms)) {
+            let godot = match oracle.render(&set_up.job(&code, PARITY_SIZE.0, PARITY_SIZE.1, &uniforms)) {
                 Ok(image) => image,
                 Err(OracleError::Shader(outcome)) => {
                     let first = outcome.errors.iter().map(|e| e.message.clone()).collect::<Vec<_>>().join("; ");

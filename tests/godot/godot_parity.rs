@@ -46,8 +46,8 @@
 //! Needs the oracle (`bash scripts/install-oracle.sh`, which `.ci/run` runs) and a Vulkan
 //! adapter; without either the test fails with what is missing.
 
-use skyoracle::{Job, Oracle, OracleError, OracleImage, Parameter};
-use skyref::{FreemanParams, Projection, Scene};
+use skyoracle::{Oracle, OracleError, OracleImage, Parameter};
+use skyref::{FreemanParams, Projection};
 use skyrun::{
     Gpu, SkyBuiltins, SkyShader, SubPasses, TexelFormat, TextureData, material_with_defaults, texture_defaults,
 };
@@ -173,7 +173,7 @@ fn statistically(
     let mut control_failed = false;
     for set_up in &SET_UPS {
         let builtins = SkyBuiltins::from_scene(&set_up.scene(), w, h);
-        let mut job = set_up.job(code);
+        let mut job = set_up.job(code, WIDTH, HEIGHT, &[]);
         (job.width, job.height) = (w, h);
         let godot = oracle.render(&job).unwrap_or_else(|e| panic!("{name}: the oracle failed: {e}"));
         for (k, material) in materials.iter().enumerate() {
@@ -200,51 +200,7 @@ fn statistically(
     problems
 }
 
-/// A camera and sun, given to both renderers in their own terms.
-#[derive(Clone, Copy, Debug)]
-struct SetUp {
-    name: &'static str,
-    fov_deg: f64,
-    yaw_deg: f64,
-    pitch_deg: f64,
-    altitude_m: f64,
-    sun: (f64, f64),
-}
-
-const SET_UPS: [SetUp; 2] = [
-    SetUp {
-        name: "toward -Z, sun 10°",
-        fov_deg: 90.0,
-        yaw_deg: 0.0,
-        pitch_deg: 0.0,
-        altitude_m: 1.0,
-        sun: (10.0, 0.0),
-    },
-    SetUp {
-        name: "yaw 120° pitch 35°, sun 35°/150°",
-        fov_deg: 60.0,
-        yaw_deg: 120.0,
-        pitch_deg: 35.0,
-        altitude_m: 500.0,
-        sun: (35.0, 150.0),
-    },
-];
-
-impl SetUp {
-    fn scene(&self) -> Scene {
-        Scene::default()
-            .with_sun(self.sun.0, self.sun.1)
-            .with_position(glam::DVec3::new(0.0, self.altitude_m, 0.0))
-            .with_fov(self.fov_deg)
-            .with_view(self.yaw_deg, self.pitch_deg)
-    }
-
-    fn job(&self, code: &str) -> Job {
-        let mut job = Job::new(code, WIDTH, HEIGHT);
-        job.scene = self.scene();
-        job
-    }
-}
+use skytest::SET_UPS;
 
 /// How gdsky's image compares with Godot's under the bound.
 #[derive(Debug, Default)]
@@ -413,7 +369,7 @@ fn gdsky_renders_what_godot_renders() {
                 .render(&gpu, Projection::Camera, WIDTH, HEIGHT, &builtins, &material)
                 .unwrap_or_else(|e| panic!("{name}: gdsky's render failed: {e}"))
                 .pixels;
-            let mut job = set_up.job(&code);
+            let mut job = set_up.job(&code, WIDTH, HEIGHT, &[]);
             job.uniforms.extend(textures.iter().map(Texture::for_godot));
             let godot = match oracle.render(&job) {
                 Ok(image) => image,
@@ -505,7 +461,8 @@ fn gdsky_renders_what_godot_renders() {
     // Power: gdsky's Freeman render of the first set-up against Godot's render of the second.
     match freeman_renders {
         Some((ours, code)) => {
-            let other = oracle.render(&SET_UPS[1].job(&code)).expect("Godot renders the Freeman sky");
+            let other =
+                oracle.render(&SET_UPS[1].job(&code, WIDTH, HEIGHT, &[])).expect("Godot renders the Freeman sky");
             let control = judge(&ours, &other);
             eprintln!(
                 "negative control (set-up 1 against set-up 2): worst {:.2e}, {} failing",
@@ -528,7 +485,7 @@ fn report_without_debanding(
     gpu: &Gpu,
     front: &gdsky::FrontendOutput,
     name: &str,
-    set_up: &SetUp,
+    set_up: &skytest::SetUp,
     builtins: &SkyBuiltins,
     material: &[u8],
     godot: &OracleImage,
