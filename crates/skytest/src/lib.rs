@@ -312,6 +312,31 @@ pub mod cube {
         most + 1e-5
     }
 
+    /// The samples of `sampled` (one per [`directions`], in order) that differ from the sky by
+    /// more than [`tolerance`] plus `extra` (the storage format's rounding), one line each.
+    pub fn misses(sky: &Sky, sampled: &[[f32; 4]], face: u32, extra: f64) -> Vec<String> {
+        directions()
+            .iter()
+            .zip(sampled)
+            .filter_map(|(d, pixel)| {
+                let want = (sky.color)(*d);
+                let error = (0..3).map(|c| (f64::from(pixel[c]) - want[c]).abs()).fold(0.0, f64::max);
+                let tolerance = tolerance(sky, *d, face) + extra;
+                (error > tolerance).then(|| {
+                    format!(
+                        "{} along ({:+.2}, {:+.2}, {:+.2}): sampled {:?}, the sky is {want:.4?} (error {error:.4}, \
+                         tolerance {tolerance:.4})",
+                        sky.name,
+                        d.x,
+                        d.y,
+                        d.z,
+                        &pixel[..3]
+                    )
+                })
+            })
+            .collect()
+    }
+
     /// A sky shader that writes the cube `env` sampled along [`directions`] into a
     /// `directions().len()`×1 panorama, pixel i for direction i.
     pub fn probe_source() -> String {

@@ -117,17 +117,7 @@ fn the_runtime_s_radiance_cube_samples_as_the_sky() {
         assert_eq!(report.radiance_faces, 6, "the first frame renders every face");
         let texture = sky.radiance_texture().expect("a radiance cube");
         let sampled = sample(&gpu, texture, &directions);
-        for (d, pixel) in directions.iter().zip(&sampled) {
-            let want = (case.color)(*d);
-            let error = (0..3).map(|c| (f64::from(pixel[c]) - want[c]).abs()).fold(0.0, f64::max);
-            let tolerance = cube::tolerance(case, *d, FACE) + HALF_FLOAT;
-            if error > tolerance {
-                failures.push(format!(
-                    "{} along ({:+.2}, {:+.2}, {:+.2}): sampled {:?}, the sky is {want:.4?} (error {error:.4}, tolerance {tolerance:.4})",
-                    case.name, d.x, d.y, d.z, &pixel[..3]
-                ));
-            }
-        }
+        failures.extend(cube::misses(case, &sampled, FACE, HALF_FLOAT));
     }
     assert!(
         failures.is_empty(),
