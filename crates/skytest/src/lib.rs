@@ -13,6 +13,7 @@
 //! * [`spirv_val`]: Khronos' validator on a module, as the tests hold every SPIR-V to it.
 //! * [`converted_freeman`]: the bundled fixture checked, lowered and emitted.
 //! * [`SetUp`], [`SET_UPS`]: the camera and sun the Godot comparisons give both renderers.
+//! * [`canvas`]: an Rgba32Float target that runtime tests and benches draw into and read back.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -350,5 +351,89 @@ pub mod cube {
             n = dirs.len(),
             last = dirs.len() - 1
         )
+    }
+}
+
+/// A colour target a test or bench draws into and reads back.
+pub mod canvas {
+    /// A colour target the test reads back: Rgba32Float, row 0 at the top.
+    pub struct Canvas {
+        pub texture: wgpu::Texture,
+        pub view: wgpu::TextureView,
+        pub width: u32,
+        pub height: u32,
+    }
+
+    impl Canvas {
+        pub fn new(device: &wgpu::Device, width: u32, height: u32) -> Self {
+            let texture = device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("test canvas"),
+                size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::Rgba32Float,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+                view_formats: &[],
+            });
+            let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
+            Self { texture, view, width, height }
+        }
+
+        /// The pixels, row 0 first.
+        pub fn read(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Vec<[f32; 4]> {
+            read_texture(device, queue, &self.texture, 0, self.width, self.height)
+        }
+    }
+
+    /// Reads layer `layer` (mip 0) of an Rgba32Float texture.
+    pub fn read_texture(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        texture: &wgpu::Texture,
+        layer: u32,
+        width: u32,
+        height: u32,
+    ) -> Vec<[f32; 4]> {
+        let row = (width * 16).div_ceil(256) * 256;
+        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("readback"),
+            size: u64::from(row * height),
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+        encoder.copy_texture_to_buffer(
+            wgpu::TexelCopyTextureInfo {
+                texture,
+                mip_level: 0,
+                origin: wgpu::Origin3d { x: 0, y: 0, z: layer },
+                aspect: wgpu::TextureAspect::All,
+            },
+            wgpu::TexelCopyBufferInfo {
+                buffer: &buffer,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(row),
+                    rows_per_image: Some(height),
+                },
+            },
+            wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+        );
+        queue.submit([encoder.finish()]);
+        buffer.slice(..).map_async(wgpu::MapMode::Read, |r| r.expect("maps"));
+        device.poll(wgpu::PollType::wait_indefinitely()).expect("the device finishes");
+        let data = buffer.slice(..).get_mapped_range().expect("mapped").to_vec();
+        (0..height)
+            .flat_map(|y| {
+                let start = (y * row) as usize;
+                data[start..start + (width * 16) as usize]
+                    .chunks_exact(16)
+                    .map(|t| {
+                        std::array::from_fn(|c| f32::from_le_bytes(t[4 * c..4 * c + 4].try_into().expect("4 bytes")))
+                    })
+                    .collect::<Vec<[f32; 4]>>()
+            })
+            .collect()
     }
 }

@@ -4,8 +4,8 @@
 //! (`skytest::cube::tolerance`) plus the rounding of its Rgba16Float texels (2⁻¹¹ relative,
 //! under 5e-4 for these colours in [0, 1]).
 
-use crate::read_texture;
 use skydraw::{RadianceOptions, SkyOptions, Target};
+use skytest::canvas::read_texture;
 use skytest::cube;
 
 const FACE: u32 = 64;
@@ -76,7 +76,7 @@ fn sample(gpu: &skyrun::Gpu, cube: &wgpu::Texture, directions: &[glam::DVec3]) -
             wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::Sampler(&sampler) },
         ],
     });
-    let canvas = crate::Canvas::new(device, directions.len() as u32, 1);
+    let canvas = skytest::canvas::Canvas::new(device, directions.len() as u32, 1);
     let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
     {
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -112,7 +112,7 @@ fn the_runtime_s_radiance_cube_samples_as_the_sky() {
             ..SkyOptions::new(Target::color(wgpu::TextureFormat::Rgba32Float))
         };
         let mut sky = crate::sky(&gpu, &converted, options);
-        let canvas = crate::Canvas::new(gpu.device(), 8, 8);
+        let canvas = skytest::canvas::Canvas::new(gpu.device(), 8, 8);
         let report = crate::frame(&gpu, &mut sky, &canvas, &skydraw::Frame::default());
         assert_eq!(report.radiance_faces, 6, "the first frame renders every face");
         let texture = sky.radiance_texture().expect("a radiance cube");

@@ -4,9 +4,9 @@
 //! mesh's colour; and a second frame creates no buffer, texture, view, bind group, sampler or
 //! pipeline (wgpu's own live-object counters).
 
-use crate::Canvas;
 use skycore::DepthConvention;
 use skydraw::{Frame, SkyOptions, Target};
+use skytest::canvas::Canvas;
 
 const WIDTH: u32 = 96;
 const HEIGHT: u32 = 64;

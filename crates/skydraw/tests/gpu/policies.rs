@@ -47,7 +47,7 @@ fn run(gpu: &skyrun::Gpu, sequence: Sequence, update: UpdatePolicy, process: Pro
     if update == UpdatePolicy::OnDemand {
         sky.request_radiance();
     }
-    let canvas = crate::Canvas::new(gpu.device(), 64, 32);
+    let canvas = skytest::canvas::Canvas::new(gpu.device(), 64, 32);
     let started = Instant::now();
     let mut faces = Vec::new();
     for n in 0..FRAMES {
