@@ -11,7 +11,11 @@
 //! of the material block (`FreemanSkyMaterial` for `freeman_sky.gdshader`) whose `Default` is the
 //! shader's defaults, with explicit padding so its layout is the WGSL layout; include it with
 //! `include!(concat!(env!("OUT_DIR"), "/freeman_sky.rs"));` in a crate that depends on
-//! `bytemuck` with its `derive` feature.
+//! `bytemuck` with its `derive` feature. Beside them, once for all the crate's shaders,
+//! [`BUILTINS_FILE`] (`sky_builtins.rs`): the built-ins block every module reads, as
+//! `SkyBuiltins` and `SkyLight` with their offsets asserted at compile time —
+//! `include!(concat!(env!("OUT_DIR"), "/sky_builtins.rs"));` — for a renderer that fills the
+//! block itself rather than through the runtime crate skydraw (which has the same structs).
 //!
 //! [`compile_with`] takes [`Options`]: uniforms baked into the shader as constants (`--set` of
 //! `gdsky convert`) and uniforms emitted as pipeline-overridable constants (`--override`). Both
@@ -99,5 +103,19 @@ pub fn compile_into_with(shader: &Path, out_dir: &Path, options: &Options) -> Re
             None => println!("cargo:warning={line}"),
         }
     }
-    converted.write_into(out_dir).map_err(|e| BuildError::Io(out_dir.to_path_buf(), e))
+    let written = converted.write_into(out_dir).map_err(|e| BuildError::Io(out_dir.to_path_buf(), e))?;
+    // One file for every shader of the crate; rewritten only when gdsky's text changed, so
+    // cargo sees no change when several shaders compile in one script.
+    let builtins = out_dir.join(BUILTINS_FILE);
+    if std::fs::read(&builtins).ok().as_deref() != Some(skycore::SKY_BUILTINS_RS.as_bytes()) {
+        skycore::io::write_atomically(&builtins, skycore::SKY_BUILTINS_RS.as_bytes())
+            .map_err(|e| BuildError::Io(builtins.clone(), e))?;
+    }
+    Ok(written)
 }
+
+/// The file [`compile`] writes beside the shaders: the built-ins block every module reads
+/// (group 0, binding 0) as `#[repr(C)]` bytemuck structs `SkyBuiltins` and `SkyLight`, their
+/// `Default` (luminance multiplier 1) and `offsets`, asserted at compile time; the text the
+/// runtime crate skydraw compiles ([`skycore::SKY_BUILTINS_RS`]).
+pub const BUILTINS_FILE: &str = "sky_builtins.rs";

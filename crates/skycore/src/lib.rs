@@ -37,3 +37,10 @@ pub use texture::{
     MAX_TEXTURE_SIDE, MAX_VOLUME_SIDE, TexelFormat, TextureData, TextureError, TextureShape, f16_to_f32, f32_to_f16,
 };
 pub use uniform::UniformValue;
+
+/// The built-ins uniform block (group 0, binding 0) of every module gdsky emits, as Rust
+/// source: `#[repr(C)]` bytemuck structs `SkyBuiltins` and `SkyLight` with their padding as
+/// fields, `Default` (luminance multiplier 1), the `offsets` module and compile-time layout
+/// assertions. The runtime (skydraw) compiles this text; `gdsky::build` writes it as
+/// `sky_builtins.rs` beside a build script's shaders.
+pub const SKY_BUILTINS_RS: &str = include_str!("sky_builtins.rs");

@@ -4,6 +4,8 @@
 //! depend on `gdsky` with `default-features = false`: the converter alone.
 
 include!(concat!(env!("OUT_DIR"), "/freeman_sky.rs"));
+// `SkyBuiltins`, `SkyLight` and `offsets`: the built-ins block the renderer fills each frame.
+include!(concat!(env!("OUT_DIR"), "/sky_builtins.rs"));
 
 /// The converted shader, WGSL.
 pub const FREEMAN_SKY_WGSL: &str = include_str!(concat!(env!("OUT_DIR"), "/freeman_sky.wgsl"));
@@ -57,6 +59,39 @@ mod tests {
             let u = uniforms.iter().find(|u| u["name"] == *name).expect("the field is a uniform");
             assert_eq!(Some(*offset as u64), u["offset"].as_u64(), "{name}");
         }
+    }
+
+    #[test]
+    fn builtins_layout_matches_the_reflection() {
+        let block = &reflection()["bindings"]["builtins"];
+        assert_eq!(Some(std::mem::size_of::<SkyBuiltins>() as u64), block["size"].as_u64());
+        let member = |name: &str| block["offsets"][name].as_u64().unwrap_or_else(|| panic!("no offset for {name}"));
+        for (name, offset) in [
+            ("camera_basis", std::mem::offset_of!(SkyBuiltins, camera_basis)),
+            ("position", std::mem::offset_of!(SkyBuiltins, position)),
+            ("time", std::mem::offset_of!(SkyBuiltins, time)),
+            ("screen_size", std::mem::offset_of!(SkyBuiltins, screen_size)),
+            ("tan_half_fov", std::mem::offset_of!(SkyBuiltins, tan_half_fov)),
+            ("render_pass", std::mem::offset_of!(SkyBuiltins, render_pass)),
+            ("luminance_multiplier", std::mem::offset_of!(SkyBuiltins, luminance_multiplier)),
+            ("cube_face", std::mem::offset_of!(SkyBuiltins, cube_face)),
+            ("lights", std::mem::offset_of!(SkyBuiltins, lights)),
+        ] {
+            assert_eq!(member(name), offset as u64, "{name}");
+        }
+        assert_eq!(Some(std::mem::size_of::<SkyLight>() as u64), block["light_stride"].as_u64());
+        for (name, offset) in [
+            ("direction", std::mem::offset_of!(SkyLight, direction)),
+            ("energy", std::mem::offset_of!(SkyLight, energy)),
+            ("color", std::mem::offset_of!(SkyLight, color)),
+            ("size", std::mem::offset_of!(SkyLight, size)),
+            ("enabled", std::mem::offset_of!(SkyLight, enabled)),
+        ] {
+            assert_eq!(block["light_offsets"][name].as_u64(), Some(offset as u64), "SkyLight.{name}");
+        }
+        // A default block draws: luminance 1, a non-zero screen.
+        let defaults = SkyBuiltins::default();
+        assert_eq!((defaults.luminance_multiplier, defaults.screen_size), (1.0, [1.0, 1.0]));
     }
 
     #[test]
