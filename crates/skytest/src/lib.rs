@@ -436,4 +436,40 @@ pub mod canvas {
             })
             .collect()
     }
+
+    /// Reads mip 0 of a 2D Rgba16Float texture (`COPY_SRC`), each half widened to f32.
+    pub fn read_rgba16(device: &wgpu::Device, queue: &wgpu::Queue, texture: &wgpu::Texture) -> Vec<[f32; 4]> {
+        let (width, height) = (texture.width(), texture.height());
+        let row = (width * 8).div_ceil(256) * 256;
+        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("readback"),
+            size: u64::from(row * height),
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+        encoder.copy_texture_to_buffer(
+            texture.as_image_copy(),
+            wgpu::TexelCopyBufferInfo {
+                buffer: &buffer,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(row),
+                    rows_per_image: Some(height),
+                },
+            },
+            texture.size(),
+        );
+        queue.submit([encoder.finish()]);
+        buffer.slice(..).map_async(wgpu::MapMode::Read, |r| r.expect("maps"));
+        device.poll(wgpu::PollType::wait_indefinitely()).expect("the device finishes");
+        let data = buffer.slice(..).get_mapped_range().expect("mapped").to_vec();
+        data.chunks_exact(row as usize)
+            .flat_map(|line| {
+                line[..(width * 8) as usize]
+                    .chunks_exact(8)
+                    .map(|t| std::array::from_fn(|c| skycore::f16_to_f32(u16::from_le_bytes([t[2 * c], t[2 * c + 1]]))))
+            })
+            .collect()
+    }
 }

@@ -5,6 +5,7 @@
 mod cube;
 mod draw;
 mod policies;
+mod targets;
 
 use skydraw::{Frame, Sky, SkyOptions, SkySource};
 use skytest::canvas::Canvas;
