@@ -4,6 +4,7 @@
 //! `GDSKY_CORPUS_DIR`, ignored by default) the corpus of real skies.
 
 mod corpus;
+mod cube_oracle;
 mod godot_frontend;
 mod godot_parity;
 mod noise_oracle;

@@ -164,6 +164,25 @@ func _uniform_value(uniform: Dictionary):
 			if image == null:
 				return null
 			return ImageTexture.create_from_image(image)
+		"cube_rgbaf":
+			# [side, base64 of six faces of little-endian f32 RGBA, +X, -X, +Y, -Y, +Z, -Z, each
+			# row 0 first]: Cubemap's layer order.
+			var side := int(v[0])
+			var all := Marshalls.base64_to_raw(str(v[1]))
+			var face_bytes := side * side * 16
+			if all.size() != face_bytes * 6:
+				return null
+			var images: Array[Image] = []
+			for f in 6:
+				var face := all.slice(f * face_bytes, (f + 1) * face_bytes)
+				var image := Image.create_from_data(side, side, false, Image.FORMAT_RGBAF, face)
+				if image == null:
+					return null
+				images.append(image)
+			var cube := Cubemap.new()
+			if cube.create_from_images(images) != OK:
+				return null
+			return cube
 	return null
 
 

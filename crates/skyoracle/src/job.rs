@@ -33,6 +33,16 @@ pub enum Parameter {
         /// `width × height` texels, row-major.
         texels: Vec<[f32; 4]>,
     },
+    /// A `samplerCube`: six square faces of `side` × `side` RGBA 32-bit float texels, in Godot's
+    /// (and Vulkan's) layer order +X, −X, +Y, −Y, +Z, −Z, each row 0 first. `main.gd` builds six
+    /// `FORMAT_RGBAF` images and a `Cubemap` from them (`create_from_images`). Read it with a
+    /// `filter_nearest` hint: WebGL2 does not filter 32-bit floats.
+    CubeRgbaF32 {
+        /// Texels per face side, 1 ..= [`MAX_TEXTURE_SIDE`] / 4.
+        side: u32,
+        /// `6 × side × side` texels, face after face.
+        texels: Vec<[f32; 4]>,
+    },
     /// A `sampler2D` bound to a `NoiseTexture2D` that Godot itself generates from these
     /// properties (see [`crate::NoiseTextureSpec`]); the render waits until it has.
     NoiseTexture2D(crate::NoiseTextureSpec),
@@ -74,6 +84,11 @@ impl Parameter {
                 let data = base64::engine::general_purpose::STANDARD.encode(bytes);
                 ("texture_rgbaf", json!([width, height, data]))
             }
+            Self::CubeRgbaF32 { side, texels } => {
+                let bytes: Vec<u8> = texels.iter().flatten().flat_map(|c| c.to_le_bytes()).collect();
+                let data = base64::engine::general_purpose::STANDARD.encode(bytes);
+                ("cube_rgbaf", json!([side, data]))
+            }
             Self::NoiseTexture2D(spec) => ("noise_texture_2d", spec.to_json()),
             Self::RampTexture(spec) => ("ramp_texture", spec.to_json()),
         }
@@ -86,13 +101,25 @@ impl Parameter {
             Self::Value(UniformValue::Vec3(v)) => v.iter().all(|c| c.is_finite()),
             Self::Value(UniformValue::Vec4(v)) | Self::Color(v) => v.iter().all(|c| c.is_finite()),
             Self::Value(UniformValue::FloatArray(v)) => v.iter().all(|c| c.is_finite()),
-            Self::TextureRgbaF32 { texels, .. } => texels.iter().flatten().all(|c| c.is_finite()),
+            Self::TextureRgbaF32 { texels, .. } | Self::CubeRgbaF32 { texels, .. } => {
+                texels.iter().flatten().all(|c| c.is_finite())
+            }
             _ => true,
         }
     }
 
     /// For a texture, whether its size is one Godot takes and matches its texels.
     fn check_size(&self) -> Result<(), String> {
+        if let Self::CubeRgbaF32 { side, texels } = self {
+            if !(1..=MAX_TEXTURE_SIDE / 4).contains(side) {
+                return Err(format!("cube face side {side} is outside 1…{}", MAX_TEXTURE_SIDE / 4));
+            }
+            let expected = 6 * u64::from(*side) * u64::from(*side);
+            if texels.len() as u64 != expected {
+                return Err(format!("a cube of {side}² faces needs {expected} texels, {} given", texels.len()));
+            }
+            return Ok(());
+        }
         let Self::TextureRgbaF32 { width, height, texels } = self else { return Ok(()) };
         let side = 1..=MAX_TEXTURE_SIDE;
         if !side.contains(width) || !side.contains(height) {
@@ -314,6 +341,20 @@ mod tests {
         refused(texture(1, MAX_TEXTURE_SIDE + 1, vec![[0.0; 4]; 4097]), "outside 1…4096");
         refused(texture(1, 1, vec![[0.0, f32::NAN, 0.0, 0.0]]), "non-finite");
         refused(texture(1, 1, vec![[f32::INFINITY, 0.0, 0.0, 0.0]]), "non-finite");
+    }
+
+    #[test]
+    fn cube_maps_are_six_square_faces() {
+        let cube = |side: u32, texels: usize| {
+            let value = Parameter::CubeRgbaF32 { side, texels: vec![[0.5; 4]; texels] };
+            Job { uniforms: vec![("env".into(), value)], ..Job::new("shader_type sky;", 4, 2) }
+        };
+        assert_eq!(cube(2, 24).validate(), Ok(()));
+        assert!(cube(2, 23).validate().expect_err("a texel short").contains("needs 24 texels"));
+        assert!(cube(0, 0).validate().is_err());
+        let json = cube(1, 6).to_json(1);
+        assert_eq!(json["uniforms"][0]["type"], "cube_rgbaf");
+        assert_eq!(json["uniforms"][0]["value"][0], 1);
     }
 
     #[test]

@@ -196,11 +196,12 @@
 //!   differ (LIGHT0_COLOR conversion, exact SKY_COORDS in 4.3–4.5, the radiance map); this oracle
 //!   does not see them. Only the background pass: no half/quarter-resolution or cubemap passes,
 //!   no radiance map, no fog.
-//! * Textures: 2D RGBA 32-bit float ones (and Godot's own noise textures, above) only, one
-//!   level, no mipmaps; read exactly with `texelFetch` (above). Filtered sampling (`texture()`)
-//!   of them was not measured (WebGL2 filters 32-bit floats only with
-//!   `OES_texture_float_linear`); other 8-bit, sRGB (`source_color`), 3D, cube and array
-//!   textures cannot be given, and a sampler uniform not given keeps Godot's default for its
+//! * Textures: 2D RGBA 32-bit float ones (and Godot's own noise textures, above) and RGBA 32-bit
+//!   float cube maps ([`Parameter::CubeRgbaF32`]) only, one level, no mipmaps; 2D ones read
+//!   exactly with `texelFetch` (above), cube maps with a `filter_nearest` hint. Filtered sampling
+//!   (`texture()`) of them was not measured (WebGL2 filters 32-bit floats only with
+//!   `OES_texture_float_linear`); other 8-bit, sRGB (`source_color`), 3D and array textures
+//!   cannot be given, and a sampler uniform not given keeps Godot's default for its
 //!   hint.
 //! * The GPU is SwiftShader: its transcendental functions are approximations of their own.
 //! * Alpha is not recovered (the background pass forces it; [`OracleImage::pixels`] has alpha 1).
