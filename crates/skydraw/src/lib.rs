@@ -71,6 +71,10 @@ mod radiance;
 mod sky;
 pub mod textures;
 
+/// The glam that [`Frame`] and [`View`] take (0.34): a renderer on another glam version converts
+/// through arrays (`Mat4::from_cols_array(&m.to_cols_array())`).
+pub use glam;
+
 pub use builtins::{RenderPass, SkyBuiltins, SkyLight, offsets, sub_pass_size};
 pub use frame::{Frame, View};
 pub use material::MaterialError;
