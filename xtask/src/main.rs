@@ -29,6 +29,12 @@ Usage:
                                 (scripts/install-oracle.sh), then runs
                                 `cargo test --workspace --locked ARGS...` (`-p NAME` in ARGS
                                 replaces --workspace) and closes with `total: N passed, M failed`
+  cargo xtask bevy [ARGS...]    the Bevy example's test, kept out of `test` (a cold Bevy build
+                                takes longer than the rest of the suite): installs lavapipe and
+                                the Vulkan loader, then runs `cargo test --locked
+                                --ignore-rust-version ARGS...` in examples/bevy-sky (its own
+                                Cargo.lock and target folder; Bevy 0.20.1 asks for Rust 1.97.1,
+                                older compilers build it with the flag)
   cargo xtask setup [demo|test] only installs what `demo` or `test` (the default) needs
   cargo xtask help              this text
 
@@ -104,6 +110,10 @@ fn run(args: &[OsString]) -> Result<u8, Failure> {
             install_oracle()?;
             test(rest)
         }
+        Some("bevy") => {
+            packages::ensure(Task::Demo)?;
+            bevy(rest)
+        }
         Some("setup") => {
             let task = match rest.iter().map(|a| a.to_str()).collect::<Vec<_>>().as_slice() {
                 [] | [Some("test")] => Task::Test,
@@ -131,6 +141,19 @@ fn demo(args: &[OsString]) -> Result<u8, Failure> {
     cargo.args(["run", "--release", "--", "demo"]).args(args);
     let _runtime_dir = RuntimeDir::set_if_unset(&mut cargo)?;
     say("running: cargo run --release -- demo (the first build takes a few minutes)");
+    let status = cargo.status().map_err(|e| Failure::env(format!("cannot run cargo: {e}")))?;
+    Ok(exit_code(status))
+}
+
+/// `cargo xtask bevy`: examples/bevy-sky's tests, in its own workspace, with ARGS.
+fn bevy(args: &[OsString]) -> Result<u8, Failure> {
+    let mut cargo = cargo();
+    cargo
+        .current_dir(repo_root().join("examples/bevy-sky"))
+        .args(["test", "--locked", "--ignore-rust-version"])
+        .args(args);
+    let _runtime_dir = RuntimeDir::set_if_unset(&mut cargo)?;
+    say("running: cargo test --locked --ignore-rust-version in examples/bevy-sky (a cold Bevy build takes a while)");
     let status = cargo.status().map_err(|e| Failure::env(format!("cannot run cargo: {e}")))?;
     Ok(exit_code(status))
 }
