@@ -143,3 +143,35 @@ fn the_cached_background_is_the_sky_it_caches() {
     // flipped or rotated gives errors of order 1.
     assert!(m.p99_rel < 2e-3 && max_abs < 4e-3, "p99 {:.2e}, max absolute {max_abs:.2e}", m.p99_rel);
 }
+
+/// The Freeman sky shaded at half and quarter resolution and upsampled in the caller's frame is
+/// `gdsky render --sky-resolution half|quarter`'s bit for bit: both shade the reduced pass into
+/// Rgba16Float and upsample it with the GPU's bilinear filter at the same texel centres.
+#[test]
+fn a_reduced_sky_resolution_is_gdsky_renders() {
+    let gpu = skytest::gpu();
+    let converted = skytest::convert("freeman_sky.gdshader", include_str!("../../../../fixtures/freeman_sky.gdshader"));
+    let (width, height) = (96, 64);
+    let scene = skytest::SET_UPS[0].scene();
+    let material =
+        skyrun::material_with_defaults(converted.front.shader.as_ref().expect("checked"), &converted.lowered, &[])
+            .expect("the defaults");
+    let shader =
+        skyrun::SkyShader::new(&gpu, &converted.wgsl, skyrun::SubPasses::default()).expect("skyrun compiles it");
+    let builtins = skyrun::SkyBuiltins::from_scene(&scene, width, height);
+    for resolution in [skycore::SkyResolution::Half, skycore::SkyResolution::Quarter] {
+        let options = skyrun::RenderOptions { resolution, ..Default::default() };
+        let reference = shader
+            .render_with(&gpu, skycore::Projection::Camera, width, height, &builtins, &material, &options)
+            .expect("skyrun renders it")
+            .pixels;
+        let canvas = Canvas::new(gpu.device(), width, height);
+        let sky_options = SkyOptions { resolution, ..SkyOptions::new(Target::color(wgpu::TextureFormat::Rgba32Float)) };
+        let mut sky = crate::sky(&gpu, &converted, sky_options);
+        let report = crate::frame(&gpu, &mut sky, &canvas, &Frame::from_scene(&scene));
+        assert_eq!(report.drawn, Drawn::Upsampled);
+        let m = skyrun::compare(&canvas.read(gpu.device(), gpu.queue()), &reference, 1e-4);
+        eprintln!("{resolution:?}: p99.9 {:.2e}, max {:.2e} against skyrun", m.p999_rel, m.max_rel);
+        assert_eq!(m.max_rel, 0.0, "{resolution:?}: max relative error {:.2e} (p99.9 {:.2e})", m.max_rel, m.p999_rel);
+    }
+}
