@@ -235,7 +235,11 @@ impl Radiance {
                     sample_count: 1,
                     dimension: wgpu::TextureDimension::D2,
                     format: options.format,
-                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+                    // COPY_SRC: a renderer may copy the cube into its own resources (an engine's
+                    // environment map, a baked probe).
+                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                        | wgpu::TextureUsages::TEXTURE_BINDING
+                        | wgpu::TextureUsages::COPY_SRC,
                     view_formats: &[],
                 })
             }

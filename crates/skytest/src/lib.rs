@@ -437,8 +437,14 @@ pub mod canvas {
             .collect()
     }
 
-    /// Reads mip 0 of a 2D Rgba16Float texture (`COPY_SRC`), each half widened to f32.
-    pub fn read_rgba16(device: &wgpu::Device, queue: &wgpu::Queue, texture: &wgpu::Texture) -> Vec<[f32; 4]> {
+    /// Reads layer `layer`, mip 0, of an Rgba16Float texture (`COPY_SRC`), each half widened
+    /// to f32.
+    pub fn read_rgba16(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        texture: &wgpu::Texture,
+        layer: u32,
+    ) -> Vec<[f32; 4]> {
         let (width, height) = (texture.width(), texture.height());
         let row = (width * 8).div_ceil(256) * 256;
         let buffer = device.create_buffer(&wgpu::BufferDescriptor {
@@ -449,7 +455,12 @@ pub mod canvas {
         });
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
         encoder.copy_texture_to_buffer(
-            texture.as_image_copy(),
+            wgpu::TexelCopyTextureInfo {
+                texture,
+                mip_level: 0,
+                origin: wgpu::Origin3d { x: 0, y: 0, z: layer },
+                aspect: wgpu::TextureAspect::All,
+            },
             wgpu::TexelCopyBufferInfo {
                 buffer: &buffer,
                 layout: wgpu::TexelCopyBufferLayout {
@@ -458,7 +469,7 @@ pub mod canvas {
                     rows_per_image: Some(height),
                 },
             },
-            texture.size(),
+            wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
         );
         queue.submit([encoder.finish()]);
         buffer.slice(..).map_async(wgpu::MapMode::Read, |r| r.expect("maps"));

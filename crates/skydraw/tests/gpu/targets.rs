@@ -82,7 +82,7 @@ fn draw_rgba16(gpu: &skyrun::Gpu, converted: &skytest::Converted, samples: u32) 
         sky.draw(&mut pass);
     }
     queue.submit([encoder.finish()]);
-    skytest::canvas::read_rgba16(device, queue, &resolved)
+    skytest::canvas::read_rgba16(device, queue, &resolved, 0)
 }
 
 #[test]
@@ -173,5 +173,47 @@ fn a_reduced_sky_resolution_is_gdsky_renders() {
         let m = skyrun::compare(&canvas.read(gpu.device(), gpu.queue()), &reference, 1e-4);
         eprintln!("{resolution:?}: p99.9 {:.2e}, max {:.2e} against skyrun", m.p999_rel, m.max_rel);
         assert_eq!(m.max_rel, 0.0, "{resolution:?}: max relative error {:.2e} (p99.9 {:.2e})", m.max_rel, m.p999_rel);
+    }
+}
+
+/// A radiance cube the caller made (`RadianceOptions::texture`) receives the same six faces as
+/// the cube the runtime makes for itself.
+#[test]
+fn the_radiance_renders_into_a_cube_the_caller_owns() {
+    let gpu = skytest::gpu();
+    let (device, queue) = (gpu.device(), gpu.queue());
+    let converted = skytest::convert("lit.gdshader", LIT);
+    let canvas = Canvas::new(device, 16, 8);
+    let side = 32;
+    let usage =
+        wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_SRC;
+    let own = device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("the caller's radiance"),
+        size: wgpu::Extent3d { width: side, height: side, depth_or_array_layers: 6 },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba16Float,
+        usage,
+        view_formats: &[],
+    });
+    let options = |texture| SkyOptions {
+        radiance: Some(RadianceOptions { size: side, mip_levels: Some(1), texture, ..Default::default() }),
+        ..SkyOptions::new(Target::color(wgpu::TextureFormat::Rgba32Float))
+    };
+    let mut theirs = crate::sky(&gpu, &converted, options(None));
+    let mut ours = crate::sky(&gpu, &converted, options(Some(own.clone())));
+    assert_eq!(crate::frame(&gpu, &mut theirs, &canvas, &lit_frame()).radiance_faces, 6);
+    assert_eq!(crate::frame(&gpu, &mut ours, &canvas, &lit_frame()).radiance_faces, 6);
+    let made = theirs.radiance_texture().expect("the runtime's cube").clone();
+    assert_eq!(
+        made.usage() & wgpu::TextureUsages::COPY_SRC,
+        wgpu::TextureUsages::COPY_SRC,
+        "the runtime's cube can be read"
+    );
+    for face in 0..6 {
+        let want = skytest::canvas::read_rgba16(device, queue, &made, face);
+        assert!(want.iter().any(|p| p != &[0.0; 4]), "face {face} was rendered");
+        assert_eq!(skytest::canvas::read_rgba16(device, queue, &own, face), want, "face {face}");
     }
 }
