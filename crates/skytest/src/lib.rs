@@ -386,7 +386,8 @@ pub mod canvas {
         }
     }
 
-    /// Reads layer `layer` (mip 0) of an Rgba32Float texture.
+    /// Reads layer `layer` (mip 0) of an Rgba32Float or Rgba16Float texture (`COPY_SRC`), halves
+    /// widened to f32.
     pub fn read_texture(
         device: &wgpu::Device,
         queue: &wgpu::Queue,
@@ -395,7 +396,12 @@ pub mod canvas {
         width: u32,
         height: u32,
     ) -> Vec<[f32; 4]> {
-        let row = (width * 16).div_ceil(256) * 256;
+        let texel: u32 = match texture.format() {
+            wgpu::TextureFormat::Rgba32Float => 16,
+            wgpu::TextureFormat::Rgba16Float => 8,
+            other => panic!("read_texture reads Rgba32Float or Rgba16Float, not {other:?}"),
+        };
+        let row = (width * texel).div_ceil(256) * 256;
         let buffer = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("readback"),
             size: u64::from(row * height),
@@ -424,62 +430,15 @@ pub mod canvas {
         buffer.slice(..).map_async(wgpu::MapMode::Read, |r| r.expect("maps"));
         device.poll(wgpu::PollType::wait_indefinitely()).expect("the device finishes");
         let data = buffer.slice(..).get_mapped_range().expect("mapped").to_vec();
-        (0..height)
-            .flat_map(|y| {
-                let start = (y * row) as usize;
-                data[start..start + (width * 16) as usize]
-                    .chunks_exact(16)
-                    .map(|t| {
-                        std::array::from_fn(|c| f32::from_le_bytes(t[4 * c..4 * c + 4].try_into().expect("4 bytes")))
-                    })
-                    .collect::<Vec<[f32; 4]>>()
-            })
-            .collect()
-    }
-
-    /// Reads layer `layer`, mip 0, of an Rgba16Float texture (`COPY_SRC`), each half widened
-    /// to f32.
-    pub fn read_rgba16(
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        texture: &wgpu::Texture,
-        layer: u32,
-    ) -> Vec<[f32; 4]> {
-        let (width, height) = (texture.width(), texture.height());
-        let row = (width * 8).div_ceil(256) * 256;
-        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("readback"),
-            size: u64::from(row * height),
-            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-            mapped_at_creation: false,
-        });
-        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
-        encoder.copy_texture_to_buffer(
-            wgpu::TexelCopyTextureInfo {
-                texture,
-                mip_level: 0,
-                origin: wgpu::Origin3d { x: 0, y: 0, z: layer },
-                aspect: wgpu::TextureAspect::All,
-            },
-            wgpu::TexelCopyBufferInfo {
-                buffer: &buffer,
-                layout: wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(row),
-                    rows_per_image: Some(height),
-                },
-            },
-            wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
-        );
-        queue.submit([encoder.finish()]);
-        buffer.slice(..).map_async(wgpu::MapMode::Read, |r| r.expect("maps"));
-        device.poll(wgpu::PollType::wait_indefinitely()).expect("the device finishes");
-        let data = buffer.slice(..).get_mapped_range().expect("mapped").to_vec();
+        let channel = |t: &[u8], c: usize| match texel {
+            16 => f32::from_le_bytes([t[4 * c], t[4 * c + 1], t[4 * c + 2], t[4 * c + 3]]),
+            _ => skycore::f16_to_f32(u16::from_le_bytes([t[2 * c], t[2 * c + 1]])),
+        };
         data.chunks_exact(row as usize)
             .flat_map(|line| {
-                line[..(width * 8) as usize]
-                    .chunks_exact(8)
-                    .map(|t| std::array::from_fn(|c| skycore::f16_to_f32(u16::from_le_bytes([t[2 * c], t[2 * c + 1]]))))
+                line[..(width * texel) as usize]
+                    .chunks_exact(texel as usize)
+                    .map(|t| std::array::from_fn(|c| channel(t, c)))
             })
             .collect()
     }

@@ -82,7 +82,7 @@ fn draw_rgba16(gpu: &skyrun::Gpu, converted: &skytest::Converted, samples: u32) 
         sky.draw(&mut pass);
     }
     queue.submit([encoder.finish()]);
-    skytest::canvas::read_rgba16(device, queue, &resolved, 0)
+    skytest::canvas::read_texture(device, queue, &resolved, 0, 64, 32)
 }
 
 #[test]
@@ -212,8 +212,8 @@ fn the_radiance_renders_into_a_cube_the_caller_owns() {
         "the runtime's cube can be read"
     );
     for face in 0..6 {
-        let want = skytest::canvas::read_rgba16(device, queue, &made, face);
+        let want = skytest::canvas::read_texture(device, queue, &made, face, side, side);
         assert!(want.iter().any(|p| p != &[0.0; 4]), "face {face} was rendered");
-        assert_eq!(skytest::canvas::read_rgba16(device, queue, &own, face), want, "face {face}");
+        assert_eq!(skytest::canvas::read_texture(device, queue, &own, face, side, side), want, "face {face}");
     }
 }
