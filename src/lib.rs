@@ -24,6 +24,8 @@
 //!    `gdresource` reads Godot's materials; [`measure`] times and measures, [`scene`] reads
 //!    scene files. The `gdsky` binary (feature `cli`, on by default) is a thin command line
 //!    over them.
+//! 5. **Testing** (feature `testing`) — `gdsky::testing`: golden images, port tests,
+//!    text snapshots and comparisons with Godot in users' own test suites.
 //!
 //! ```
 //! let source = "shader_type sky;\nvoid sky() { COLOR = vec3(0.3, 0.5, 0.9) * (0.5 + 0.5 * EYEDIR.y); }\n";
@@ -56,6 +58,8 @@ pub mod engine;
 pub mod measure;
 #[cfg(feature = "engines")]
 pub mod scene;
+#[cfg(feature = "testing")]
+pub mod testing;
 
 pub use convert::{ConvertError, Converted, IncludeLoader, Options, Written, convert, convert_file, emit};
 pub use gdshader as frontend;

@@ -113,6 +113,16 @@ impl Sky {
     /// [`Sky::compile`] with other WGSL of the same shader and bindings (the
     /// instrumented module of `render --trace-nonfinite`).
     pub fn compile_wgsl(&self, gpu: &skyrun::Gpu, wgsl: &str) -> Result<skyrun::SkyShader, Error> {
+        self.compile_source(gpu, wgsl, None)
+    }
+
+    /// [`Sky::compile_wgsl`] from SPIR-V of the same shader and bindings (a hand port's
+    /// `.spv`); `wgsl` is the same module's WGSL, whose resources give the layouts.
+    pub fn compile_spirv(&self, gpu: &skyrun::Gpu, wgsl: &str, spirv: &[u32]) -> Result<skyrun::SkyShader, Error> {
+        self.compile_source(gpu, wgsl, Some(spirv))
+    }
+
+    fn compile_source(&self, gpu: &skyrun::Gpu, wgsl: &str, spirv: Option<&[u32]>) -> Result<skyrun::SkyShader, Error> {
         let failed = |err: &dyn std::fmt::Display| Error::input(err);
         let (defaults, bindings) = match self.front.shader.as_ref() {
             Some(s) => {
@@ -120,10 +130,13 @@ impl Sky {
             }
             None => Default::default(),
         };
-        let mut shader = skyrun::SkyShader::new(gpu, wgsl, skyrun::SubPasses::of(&self.front))
-            .map_err(|err| failed(&err))?
-            .with_texture_defaults(defaults)
-            .with_material_textures(gpu, bindings);
+        let sub_passes = skyrun::SubPasses::of(&self.front);
+        let shader = match spirv {
+            Some(words) => skyrun::SkyShader::from_spirv(gpu, wgsl, words, sub_passes),
+            None => skyrun::SkyShader::new(gpu, wgsl, sub_passes),
+        };
+        let mut shader =
+            shader.map_err(|err| failed(&err))?.with_texture_defaults(defaults).with_material_textures(gpu, bindings);
         for (name, data) in &self.textures {
             shader.set_texture(gpu, name, data).map_err(|err| failed(&err))?;
         }

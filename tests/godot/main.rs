@@ -10,6 +10,8 @@ mod godot_parity;
 mod noise_oracle;
 mod ramp_oracle;
 mod seed_skies;
+#[cfg(feature = "testing")]
+mod testing_api;
 
 /// The suite's handles on the binary and its scratch folders (skytest's, for this crate).
 mod common {

@@ -9,6 +9,8 @@ mod freeman_stable;
 mod loop_budget;
 mod measure_textures;
 mod reread;
+#[cfg(feature = "testing")]
+mod testing_api;
 
 /// The suite's scratch folders (skytest's, for this crate).
 mod common {

@@ -28,7 +28,8 @@ Usage:
                                 `node` or `npm` is not on PATH) and the Godot oracle's parts
                                 (scripts/install-oracle.sh), then runs
                                 `cargo test --workspace --locked ARGS...` (`-p NAME` in ARGS
-                                replaces --workspace) and closes with `total: N passed, M failed`
+                                replaces --workspace) with GDSKY_FAIL_ON_SKIP=1 (a skipped
+                                snapshot is a failure) and closes with `total: N passed, M failed`
   cargo xtask bevy [ARGS...]    the Bevy example's test, kept out of `test` (a cold Bevy build
                                 takes longer than the rest of the suite): installs lavapipe and
                                 the Vulkan loader, then runs `cargo test --locked
@@ -171,6 +172,9 @@ fn install_oracle() -> Result<(), Failure> {
     if status.success() { Ok(()) } else { Err(Failure::env(format!("scripts/install-oracle.sh failed ({status})"))) }
 }
 
+/// gdsky::testing's switch that turns skipped comparisons into failures.
+const FAIL_ON_SKIP: &str = "GDSKY_FAIL_ON_SKIP";
+
 /// `cargo xtask test`: `cargo test --workspace --locked ARGS`, its output passed through, then
 /// the closing line summing its `test result:` lines. Exits with cargo test's status.
 fn test(args: &[OsString]) -> Result<u8, Failure> {
@@ -178,6 +182,11 @@ fn test(args: &[OsString]) -> Result<u8, Failure> {
     let mut cargo = cargo();
     cargo.args(&test_args).stdout(Stdio::piped());
     let _runtime_dir = RuntimeDir::set_if_unset(&mut cargo)?;
+    // The suite installs lavapipe and the oracle first: a gdsky::testing skip (no adapter, no
+    // oracle) means a test did not run, which is a failure here.
+    if std::env::var_os(FAIL_ON_SKIP).is_none() {
+        cargo.env(FAIL_ON_SKIP, "1");
+    }
     let shown: Vec<String> = test_args.iter().map(|a| a.to_string_lossy().into_owned()).collect();
     say(&format!("running: cargo {}", shown.join(" ")));
     let mut child = cargo.spawn().map_err(|e| Failure::env(format!("cannot run cargo: {e}")))?;

@@ -9,6 +9,7 @@ use std::fmt;
 use std::io::{self, Cursor};
 use std::path::{Path, PathBuf};
 
+use exr::meta::attribute::{AttributeValue, Text};
 use exr::prelude::{
     Encoding, MetaData, ReadChannels, ReadLayers, ReadSpecificChannel, SampleType, SpecificChannels, Vec2,
     WritableImage,
@@ -139,6 +140,14 @@ fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), ImageError> {
 /// The file is replaced atomically: encoded in memory, written to a temporary file in the
 /// same directory and renamed over `path`.
 pub fn write_exr(path: &Path, image: &Image) -> Result<(), ImageError> {
+    write_exr_annotated(path, image, &[])
+}
+
+/// [`write_exr`] with `notes` as text attributes of the file's header (`name → text`, what a
+/// golden image records: the adapter that drew it, gdsky's version, its views); read them back
+/// with [`read_exr_notes`]. OpenEXR's text attributes hold Latin-1: other characters are
+/// written as `?`.
+pub fn write_exr_annotated(path: &Path, image: &Image, notes: &[(&str, &str)]) -> Result<(), ImageError> {
     image.check()?;
     let width = image.width as usize;
     let channels = SpecificChannels::rgba(|Vec2(x, y): Vec2<usize>| {
@@ -148,8 +157,15 @@ pub fn write_exr(path: &Path, image: &Image) -> Result<(), ImageError> {
     // ZIP (16 scanlines per block) rather than uncompressed: lossless, so the floats come back
     // bit for bit; OpenEXR's own default, so every reader has it; and a 512×256 Freeman
     // panorama takes 0.99 MB instead of 2.1 MB. B44 and DWA are lossy, PIZ less widespread.
-    let exr_image =
+    let mut exr_image =
         exr::prelude::Image::from_encoded_channels((width, image.height as usize), Encoding::SMALL_LOSSLESS, channels);
+    for (name, text) in notes {
+        let latin1 = |t: &str| t.chars().map(|c| if u32::from(c) < 256 { c } else { '?' }).collect::<String>();
+        // Names and texts are Latin-1 after the replacement, so `new_or_none` never refuses.
+        if let (Some(name), Some(text)) = (Text::new_or_none(latin1(name)), Text::new_or_none(latin1(text))) {
+            exr_image.attributes.other.insert(name, AttributeValue::Text(text));
+        }
+    }
     let mut bytes = Cursor::new(Vec::new());
     let encode_error = |source| ImageError::Exr { path: path.to_owned(), action: "encode", source };
     exr_image.write().to_buffered(&mut bytes).map_err(encode_error)?;
@@ -217,6 +233,32 @@ struct Pixels {
 pub fn read_exr(path: &Path) -> Result<Image, ImageError> {
     let bytes = skycore::io::read_limited(path, MAX_EXR_BYTES).map_err(|e| io_error(path, "read", e))?;
     decode_exr(path, &bytes)
+}
+
+/// The text attributes of an OpenEXR file's header that are not OpenEXR's own (what
+/// [`write_exr_annotated`] wrote), sorted by name; only the header is decoded. Read like
+/// [`read_exr`] (bounded, a regular file).
+pub fn read_exr_notes(path: &Path) -> Result<Vec<(String, String)>, ImageError> {
+    let bytes = skycore::io::read_limited(path, MAX_EXR_BYTES).map_err(|e| io_error(path, "read", e))?;
+    let exr_error = |source| ImageError::Exr { path: path.to_owned(), action: "decode", source };
+    let meta = std::panic::catch_unwind(|| MetaData::read_from_buffered(Cursor::new(&bytes[..]), false))
+        .map_err(|_| ImageError::Unreadable {
+            path: path.to_owned(),
+            reason: "the OpenEXR decoder panicked on its header; the file is probably corrupt".into(),
+        })?
+        .map_err(exr_error)?;
+    let mut notes: Vec<(String, String)> = meta
+        .headers
+        .iter()
+        .flat_map(|h| h.shared_attributes.other.iter().chain(h.own_attributes.other.iter()))
+        .filter_map(|(name, value)| match value {
+            AttributeValue::Text(text) => Some((name.to_string(), text.to_string())),
+            _ => None,
+        })
+        .collect();
+    notes.sort();
+    notes.dedup();
+    Ok(notes)
 }
 
 /// [`read_exr`] on bytes already in memory; `path` is only for messages.
@@ -358,8 +400,10 @@ fn check_tonemap(exposure: f32, white: [f32; 3]) -> Result<(), ImageError> {
 }
 
 /// Bruneton's demo tone map per channel, in f32 as on the GPU: negative radiance is shown as
-/// 0 (the preview is for looking; the EXR and the heatmap keep the evidence).
-pub(crate) fn tonemap(pixel: [f32; 4], exposure: f32, white: [f32; 3]) -> [u8; 3] {
+/// 0 (the preview is for looking; the EXR and the heatmap keep the evidence). A pixel with a
+/// NaN channel is magenta, one with an infinite channel cyan: what [`write_png_preview`] writes
+/// for each pixel.
+pub fn tonemap(pixel: [f32; 4], exposure: f32, white: [f32; 3]) -> [u8; 3] {
     let rgb = [pixel[0], pixel[1], pixel[2]];
     if rgb.iter().any(|c| c.is_nan()) {
         return MAGENTA;

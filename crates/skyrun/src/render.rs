@@ -30,6 +30,25 @@ const SUB_PASS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 /// sky in well under a second; the bound only keeps a hung driver from hanging a test run.
 const GPU_TIMEOUT: Duration = Duration::from_secs(300);
 
+/// The result of a `map_async` whose submission the device has finished. Usually there already:
+/// the poll that waited ran the callback. When threads share the device, another thread's poll
+/// may have taken the callback and run it a moment later, so this polls and waits for it, up to
+/// [`GPU_TIMEOUT`]; `None` if it never comes.
+fn mapped<T>(device: &wgpu::Device, receiver: &mpsc::Receiver<T>) -> Option<T> {
+    let deadline = Instant::now() + GPU_TIMEOUT;
+    loop {
+        match receiver.try_recv() {
+            Ok(value) => return Some(value),
+            Err(mpsc::TryRecvError::Disconnected) => return None,
+            Err(mpsc::TryRecvError::Empty) if Instant::now() > deadline => return None,
+            Err(mpsc::TryRecvError::Empty) => {
+                let _ = device.poll(wgpu::PollType::Poll);
+                std::thread::sleep(Duration::from_millis(1));
+            }
+        }
+    }
+}
+
 /// Why a render failed.
 #[derive(Clone, Debug, PartialEq)]
 pub enum RenderError {
@@ -565,10 +584,10 @@ impl SkyShader {
             .poll(wgpu::PollType::Wait { submission_index: Some(submission), timeout: Some(GPU_TIMEOUT) })
             .map_err(|e| RenderError::Poll(e.to_string()))?;
         let gpu_wait = submitted.elapsed();
-        match receiver.try_recv() {
-            Ok(Ok(())) => {}
-            Ok(Err(e)) => return Err(RenderError::Map(e.to_string())),
-            Err(_) => {
+        match mapped(device, &receiver) {
+            Some(Ok(())) => {}
+            Some(Err(e)) => return Err(RenderError::Map(e.to_string())),
+            None => {
                 return Err(RenderError::Map("the map callback did not run after the device went idle".into()));
             }
         }
@@ -588,8 +607,9 @@ impl SkyShader {
             pixels
         };
         readback.unmap();
-        let gpu_time = match (&timestamps, stamp_receiver.try_recv()) {
-            (Some((buffer, passes)), Ok(Ok(()))) => {
+        let stamps = timestamps.as_ref().and_then(|_| mapped(device, &stamp_receiver));
+        let gpu_time = match (&timestamps, stamps) {
+            (Some((buffer, passes)), Some(Ok(()))) => {
                 let view = buffer.get_mapped_range(..).map_err(|e| RenderError::Map(e.to_string()))?;
                 let ticks: Vec<u64> = view
                     .chunks_exact(8)
