@@ -11,7 +11,7 @@
 //! truth serves them all. A shader sweeps only the knobs it reads
 //! ([`gdsky_naga::reflect::uniforms_read`]): `freeman_fast` declares `sun_samples` for material
 //! compatibility but never reads it, and sweeping it would time the same image four times. A
-//! shader that reads only `view_samples` gets a finer default sweep ([`VIEW_ONLY_SAMPLES`]), since
+//! shader that reads only `view_samples` gets a finer default sweep (`VIEW_ONLY_SAMPLES`), since
 //! it has one dimension to spend its configurations on. All configurations of all shaders are
 //! timed in the same interleaved rounds, so the ratios between shaders come from one run on one
 //! machine state. After the fronts, each shader after the first is compared with the first's
@@ -61,7 +61,7 @@ const SUN_SAMPLES: [i32; 4] = [2, 4, 8, 16];
 /// configurations as fit the same decade and a half, about √2 apart.
 const VIEW_ONLY_SAMPLES: [i32; 11] = [2, 3, 4, 6, 8, 12, 16, 24, 32, 48, 64];
 
-/// What [`bench`] measures and how: the CLI's `gdsky bench` flags as values.
+/// What [`bench()`] measures and how: the CLI's `gdsky bench` flags as values.
 #[derive(Debug)]
 pub struct BenchOptions {
     /// The shaders on one chart (the first is the one the others are compared with); `None`
@@ -179,7 +179,7 @@ impl std::str::FromStr for TruthChoice {
     }
 }
 
-/// What [`bench`] found: the printed report, the files it wrote, and one row per configuration.
+/// What [`bench()`] found: the printed report, the files it wrote, and one row per configuration.
 #[derive(Clone, Debug)]
 pub struct BenchReport {
     /// The report the CLI prints: the fronts, the comparisons, what was written.

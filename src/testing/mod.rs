@@ -148,6 +148,29 @@ pub struct WorstPixel {
     pub rel: f64,
 }
 
+impl std::fmt::Display for WorstPixel {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let face = self.face.map(|face| format!(" face {face}")).unwrap_or_default();
+        let [dx, dy, dz] = self.eyedir;
+        let (g, e) = (self.got, self.expected);
+        write!(
+            f,
+            "pixel ({}, {}){face} EYEDIR ({dx:+.4}, {dy:+.4}, {dz:+.4}) {}: rel {:.3e}, got [{:.6e}, {:.6e}, {:.6e}], \
+             expected [{:.6e}, {:.6e}, {:.6e}]",
+            self.x,
+            self.y,
+            ["R", "G", "B"][self.channel.min(2)],
+            self.rel,
+            g[0],
+            g[1],
+            g[2],
+            e[0],
+            e[1],
+            e[2]
+        )
+    }
+}
+
 /// One view of a comparison.
 #[derive(Clone, Debug)]
 pub struct ViewReport {
@@ -221,6 +244,14 @@ impl Outcome {
         self.views.iter().reduce(|a, b| if b.metrics.p999_rel > a.metrics.p999_rel { b } else { a })
     }
 
+    /// The failing view with the largest p99.9 relative error.
+    fn worst_failing_view(&self) -> Option<&ViewReport> {
+        self.views
+            .iter()
+            .filter(|v| !v.violations.is_empty())
+            .reduce(|a, b| if b.metrics.p999_rel > a.metrics.p999_rel { b } else { a })
+    }
+
     /// The largest of a statistic over the views (`|m| m.p99_rel`, …); 0 with no views.
     pub fn max_over_views(&self, statistic: impl Fn(&skyrun::Metrics) -> f64) -> f64 {
         self.views.iter().map(|v| statistic(&v.metrics)).fold(0.0, f64::max)
@@ -264,34 +295,28 @@ impl Outcome {
         if matches!(self.verdict, Verdict::Mismatch) {
             let _ = writeln!(out, "  tolerance: {}", self.tolerance);
         }
+        let failing: Vec<&ViewReport> = self.views.iter().filter(|v| !v.violations.is_empty()).collect();
+        if let (Some(worst), false) = (self.worst_failing_view(), failing.is_empty()) {
+            let _ = writeln!(
+                out,
+                "  {} of {} view(s) outside the tolerance; the worst is `{}`",
+                failing.len(),
+                self.views.len(),
+                worst.view.name
+            );
+        }
         for v in &self.views {
             let ssim = v.ssim.map(|s| format!(", SSIM {s:.4}")).unwrap_or_default();
             let mark = if v.violations.is_empty() { "ok" } else { "FAILED" };
             let _ = writeln!(out, "  {} [{mark}]: {}{ssim}", v.view.name, v.metrics);
-            for why in &v.violations {
-                let _ = writeln!(out, "      {why}");
+            if !v.violations.is_empty() {
+                let _ = writeln!(out, "      {}", v.violations.join("; "));
             }
-            if v.violations.is_empty() {
-                continue;
-            }
-            for w in &v.worst {
-                let face = w.face.map(|f| format!(" face {f}")).unwrap_or_default();
-                let [dx, dy, dz] = w.eyedir;
-                let _ = writeln!(
-                    out,
-                    "      pixel ({}, {}){face} EYEDIR ({dx:+.4}, {dy:+.4}, {dz:+.4}) {}: rel {:.3e}, got [{:.6e}, \
-                     {:.6e}, {:.6e}], expected [{:.6e}, {:.6e}, {:.6e}]",
-                    w.x,
-                    w.y,
-                    ["R", "G", "B"][w.channel.min(2)],
-                    w.rel,
-                    w.got[0],
-                    w.got[1],
-                    w.got[2],
-                    w.expected[0],
-                    w.expected[1],
-                    w.expected[2],
-                );
+        }
+        if let Some(worst) = self.worst_failing_view().filter(|w| !w.worst.is_empty()) {
+            let _ = writeln!(out, "  worst pixels of `{}` (x, y within the view):", worst.view.name);
+            for w in &worst.worst {
+                let _ = writeln!(out, "      {w}");
             }
         }
         for f in &self.files {

@@ -120,7 +120,10 @@ pub(super) fn compare_views(
     let mut reports = Vec::with_capacity(views.len());
     for ((view, (a, gpu_time)), b) in views.iter().zip(got).zip(expected) {
         let metrics = skyrun::compare(&a.pixels, &b.pixels, tolerance.floor);
-        let ssim = tolerance.min_ssim.map(|_| ssim(a, b));
+        // The SSIM `gdsky compare --mode stats` gives: of the previews as `render --png` tone maps them.
+        let ssim = tolerance.min_ssim.map(|_| {
+            skyrun::compare_stats(&a.pixels, &b.pixels, a.width as usize, a.height as usize, tolerance.floor).ssim
+        });
         let violations = tolerance.violations(&metrics, ssim);
         // A pixel once, at its worst channel: the list names places, not channels.
         let mut seen = std::collections::HashSet::new();
@@ -147,24 +150,4 @@ pub(super) fn compare_views(
         reports.push(ViewReport { view: view.clone(), metrics, ssim, worst, violations, gpu_time: *gpu_time });
     }
     reports
-}
-
-/// SSIM of the two images' previews (Bruneton's tone map, as the PNGs show them): the mean over
-/// 8×8 windows, the worst of R, G and B (image-compare's `MSSIMSimple`). Images too small for
-/// one window compare equal only when identical.
-fn ssim(a: &skyrun::Image, b: &skyrun::Image) -> f64 {
-    let preview = |i: &skyrun::Image| {
-        let rgb: Vec<u8> = i
-            .pixels
-            .iter()
-            .flat_map(|p| skyrun::tonemap(*p, skyrun::DEFAULT_EXPOSURE, skyrun::DEFAULT_WHITE))
-            .collect();
-        image::RgbImage::from_raw(i.width, i.height, rgb)
-    };
-    match (preview(a), preview(b)) {
-        (Some(x), Some(y)) => image_compare::rgb_similarity_structure(&image_compare::Algorithm::MSSIMSimple, &x, &y)
-            .map(|s| s.score)
-            .unwrap_or(if x == y { 1.0 } else { 0.0 }),
-        _ => 0.0,
-    }
 }

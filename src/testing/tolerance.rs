@@ -11,7 +11,8 @@ use std::path::{Path, PathBuf};
 /// Per RGB channel the relative error is `|got − expected| / max(|expected|, floor)`; a view
 /// passes when its 99th and 99.9th percentiles and its maximum are within the bounds, no
 /// channel of either image is NaN or ±∞ (never allowed), and, when `min_ssim` is set, the SSIM
-/// of the two tone-mapped previews (8×8 windows, the worst of R, G and B) is at least that.
+/// of the two tone-mapped previews (`skyrun::Stats::ssim`, what `gdsky compare --mode stats`
+/// reports: 8×8 windows, the worst of R, G and B) is at least that.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Tolerance {
     /// Below this magnitude errors count as absolute: `max(|expected|, floor)` divides.

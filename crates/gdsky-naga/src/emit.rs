@@ -241,7 +241,7 @@ pub fn reread_wgsl(module: &naga::Module, text: &str) -> Result<(), EmitError> {
 ///
 /// Each override of the module (`--override`) becomes a specialization constant: an
 /// `OpSpecConstant` decorated `SpecId k` (its `@id`) whose default is the override's. naga 30's
-/// writer has no specialization constants, so [`spec_constants`] writes a copy of the module in
+/// writer has no specialization constants, so `spec_constants` writes a copy of the module in
 /// which each override is an ordinary constant with a sentinel value found nowhere else, and
 /// turns that one constant of the binary into the specialization constant.
 pub fn to_spirv(lowered: &Lowered) -> Result<Vec<u32>, EmitError> {

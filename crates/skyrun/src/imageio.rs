@@ -400,10 +400,8 @@ fn check_tonemap(exposure: f32, white: [f32; 3]) -> Result<(), ImageError> {
 }
 
 /// Bruneton's demo tone map per channel, in f32 as on the GPU: negative radiance is shown as
-/// 0 (the preview is for looking; the EXR and the heatmap keep the evidence). A pixel with a
-/// NaN channel is magenta, one with an infinite channel cyan: what [`write_png_preview`] writes
-/// for each pixel.
-pub fn tonemap(pixel: [f32; 4], exposure: f32, white: [f32; 3]) -> [u8; 3] {
+/// 0 (the preview is for looking; the EXR and the heatmap keep the evidence).
+pub(crate) fn tonemap(pixel: [f32; 4], exposure: f32, white: [f32; 3]) -> [u8; 3] {
     let rgb = [pixel[0], pixel[1], pixel[2]];
     if rgb.iter().any(|c| c.is_nan()) {
         return MAGENTA;

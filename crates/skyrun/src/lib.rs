@@ -127,8 +127,8 @@ pub use gdsky_naga::reflect::TextureBinding;
 pub use gpu::{AdapterSummary, Gpu, NoAdapter};
 pub use imageio::{
     DEFAULT_EXPOSURE, DEFAULT_WHITE, Image, ImageError, MAX_EXR_BYTES, MAX_READ_PIXELS, MAX_RENDER_PIXELS,
-    MAX_RENDER_SIDE, check_render_size, read_exr, read_exr_notes, tonemap, write_exr, write_exr_annotated,
-    write_heatmap_png, write_overlay_png, write_png_preview, write_side_by_side_png,
+    MAX_RENDER_SIDE, check_render_size, read_exr, read_exr_notes, write_exr, write_exr_annotated, write_heatmap_png,
+    write_overlay_png, write_png_preview, write_side_by_side_png,
 };
 pub use material::{
     MaterialError, UniformValue, freeman_material, freeman_values, material_bytes, material_with_defaults,

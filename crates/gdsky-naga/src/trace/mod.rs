@@ -1,6 +1,6 @@
 //! # Tracing NaN and Inf to the source
 //!
-//! [`instrument`] rewrites a validated module (the one [`crate::lower_with`] gives, unchanged:
+//! [`instrument`] rewrites a validated module (the one [`crate::lower`] gives, unchanged:
 //! the snapshots and every other caller see the same module) into one that also records, per
 //! pixel, the **first** expression in execution order whose value was not finite, as a small
 //! integer: the id of a *site* in a table that comes with the module ([`Site`]: file, line,

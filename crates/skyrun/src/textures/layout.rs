@@ -30,7 +30,7 @@ use std::path::{Path, PathBuf};
 pub const GODOT_VOLUME_GRID: (u32, u32) = (8, 8);
 
 /// Reads a cube map: six face files (+X, −X, +Y, −Y, +Z, −Z) or one image in a cross or grid
-/// layout (see the [module](self) table). `srgb` as for [`read_texture`].
+/// layout (the table at the top of `textures/layout.rs`). `srgb` as for [`read_texture`].
 ///
 /// Errors: [`TextureError::Read`] for a file that cannot be read; [`TextureError::Layout`]
 /// naming the files for another number of files, faces that are not square or not all of one
