@@ -116,3 +116,27 @@ fn a_spirv_port_passes_and_a_port_without_an_entry_point_is_refused() {
         refused.report()
     );
 }
+
+#[test]
+fn a_cubemap_snapshot_reports_the_face_of_its_worst_pixel() {
+    let dir = crate::common::scratch("testing_api", "cubemap");
+    let cube = |shader: &Path| {
+        snapshot(&dir, shader)
+            .views(View::defaults().into_iter().skip(2).take(1))
+            .projection(gdsky::Projection::CubeFace(0))
+            .size(16, 16)
+            .check()
+    };
+    let first = cube(&gradient_sun(&dir, "0.6"));
+    assert_eq!(first.verdict, Verdict::Missing, "{}", first.report());
+    let image = skyrun::read_exr(&dir.join("sky.new.exr")).expect("the render");
+    assert_eq!((image.width, image.height), (6 * 16, 16), "the six faces side by side");
+    std::fs::rename(dir.join("sky.new.exr"), dir.join("sky.exr")).expect("rename");
+
+    let changed = cube(&gradient_sun(&dir, "0.63"));
+    assert_eq!(changed.verdict, Verdict::Mismatch, "{}", changed.report());
+    let worst = changed.views[0].worst.first().expect("a worst pixel");
+    // The sun is at azimuth 180° (+Z), 20° up: on the +Z face (layer 4).
+    assert_eq!(worst.face, Some(4), "{worst:?}");
+    assert!(worst.x < 16 && worst.y < 16, "within the face: {worst:?}");
+}
