@@ -1,14 +1,13 @@
-// Freeman sky (fixtures/freeman_sky.gdshader), ported to WGSL by hand.
+// Freeman sky (shaders/freeman_sky.gdshader), ported to WGSL by hand.
 //
-// Written for the benchmark that compares the render time of gdsky's converted WGSL with what a
-// careful human would write from the Godot source. It is a drop-in replacement for
-// `gdsky convert fixtures/freeman_sky.gdshader` at the binding level, so `skyrun::render` can
-// draw either file with the same inputs:
+// A copy of gdsky's crates/skyrun/benches/freeman_hand.wgsl (the human baseline of its render-time
+// benchmark), kept here so that this crate stands alone. It is a drop-in replacement for
+// `gdsky convert shaders/freeman_sky.gdshader` at the binding level, so the same host code draws
+// either file with the same inputs (tests/ports.rs holds it against the conversion):
 //
 // * group 0 binding 0: `SkyBuiltins`, the wrapper's fixed block (copied field for field);
 // * group 1 binding 0: `Material`, the 22 uniforms in declaration order, the same struct as the
-//   converted shader's, hence the same offsets (tests/hand_port.rs checks them against the
-//   lowering);
+//   converted shader's, hence the same offsets;
 // * `vs_main` (fullscreen triangle), `fs_panorama` and `fs_camera`, computing EYEDIR exactly as
 //   the wrapper does (pixel centres; panorama: phi = 2*pi*u, theta = pi*v; camera:
 //   normalize(camera_basis * ((2u-1)*t*W/H, (1-2v)*t, -1))), reading LIGHT0_ENABLED and
