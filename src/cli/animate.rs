@@ -57,7 +57,7 @@ fn animate_command(args: &AnimateArgs, matches: &ArgMatches) -> Result<(), Error
         )));
     }
     let input = Input::open(Some(&args.scene_file))?;
-    eprint!("{}", input.warnings);
+    err!("{}", input.warnings);
     let file = input.scene.ok_or_else(|| Error::input("not a scene file"))?;
     let mut base = args.scene.clone();
     base.merge_file(&file, matches);
@@ -82,6 +82,6 @@ fn animate_command(args: &AnimateArgs, matches: &ArgMatches) -> Result<(), Error
         no_baseline: args.no_baseline,
     };
     let report = animate::animate(&options, &Bar::new())?;
-    print!("{}", report.text);
+    out!("{}", report.text);
     Ok(())
 }

@@ -67,7 +67,7 @@ pub fn run(args: &BakeLutArgs) -> ExitCode {
     let image = skyrun::Image { width: table.width, height: table.height, pixels: table.texels };
     match skyrun::write_exr(&args.out, &image) {
         Ok(()) => {
-            eprintln!(
+            errln!(
                 "wrote {} ({}x{} texels, baked in {:.2?})",
                 args.out.display(),
                 image.width,

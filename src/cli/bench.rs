@@ -137,7 +137,7 @@ pub fn run(args: &BenchArgs, matches: &ArgMatches) -> ExitCode {
 
 fn bench(args: &BenchArgs, matches: &ArgMatches) -> Result<(), Error> {
     let input = Input::open(args.files.first().map(PathBuf::as_path))?;
-    eprint!("{}", input.warnings);
+    err!("{}", input.warnings);
     let mut shaders = vec![input.shader.clone()];
     for file in args.files.iter().skip(1) {
         if gdsky::scene::is_scene_path(file) || gdsky::scene::is_godot_resource(file) {
@@ -168,6 +168,6 @@ fn bench(args: &BenchArgs, matches: &ArgMatches) -> Result<(), Error> {
         skipping: args.skipping.skipping.then(|| SkippingOptions { shaders: args.skipping.skipping_shader.clone() }),
     };
     let report = bench::bench(&options, &Bar::new())?;
-    print!("{}", report.text);
+    out!("{}", report.text);
     Ok(())
 }

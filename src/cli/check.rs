@@ -2,7 +2,7 @@
 
 use clap::{Args, ValueEnum};
 use gdsky::frontend::diag::{render_human, render_json};
-use std::io::{IsTerminal, Write};
+use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -30,7 +30,6 @@ pub fn run(args: &CheckArgs) -> ExitCode {
     let mut unreadable = false;
     let mut invalid = false;
     let color = std::io::stderr().is_terminal() && std::env::var_os("NO_COLOR").is_none();
-    let mut stdout = std::io::stdout().lock();
     for path in &args.files {
         let output = match gdsky::check_file(path) {
             Ok(o) => o,
@@ -38,14 +37,14 @@ pub fn run(args: &CheckArgs) -> ExitCode {
                 unreadable = true;
                 match args.diagnostics {
                     DiagnosticsFormat::Human => {
-                        eprintln!("error: cannot read {}: {err}", path.display())
+                        errln!("error: cannot read {}: {err}", path.display())
                     }
                     DiagnosticsFormat::Json => {
                         let line = serde_json::json!({
                             "file": path.display().to_string(), "line": 0, "column": 0, "end_line": 0, "end_column": 0,
                             "severity": "error", "code": "E000", "message": format!("cannot read the file: {err}"),
                         });
-                        let _ = writeln!(stdout, "{line}");
+                        outln!("{line}");
                     }
                 }
                 continue;
@@ -54,15 +53,15 @@ pub fn run(args: &CheckArgs) -> ExitCode {
         invalid |= output.has_errors();
         match args.diagnostics {
             DiagnosticsFormat::Human => {
-                eprint!("{}", render_human(&output.db, &output.diagnostics, color));
+                err!("{}", render_human(&output.db, &output.diagnostics, color));
                 let errors = output.diagnostics.iter().filter(|d| d.is_error()).count();
                 let warnings = output.diagnostics.len() - errors;
                 let verdict = if errors > 0 { format!("{errors} error(s)") } else { "ok".to_string() };
                 let extra = if warnings > 0 { format!(", {warnings} warning(s)") } else { String::new() };
-                let _ = writeln!(stdout, "{}: {verdict}{extra}", path.display());
+                outln!("{}: {verdict}{extra}", path.display());
             }
             DiagnosticsFormat::Json => {
-                let _ = write!(stdout, "{}", render_json(&output.db, &output.diagnostics));
+                out!("{}", render_json(&output.db, &output.diagnostics));
             }
         }
     }

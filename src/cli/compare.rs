@@ -3,7 +3,7 @@
 
 use super::scene::{F32_LIMIT, Range, parse_number};
 use clap::{Args, ValueEnum};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 #[derive(Args)]
@@ -80,7 +80,7 @@ fn parse_floor(s: &str) -> Result<f32, String> {
 
 pub fn run(args: &CompareArgs) -> ExitCode {
     if args.mode == Mode::Pixel && (args.min_ssim.is_some() || args.max_region_rel.is_some()) {
-        eprintln!("error: --min-ssim and --max-region-rel need --mode stats");
+        errln!("error: --min-ssim and --max-region-rel need --mode stats");
         return ExitCode::from(1);
     }
     // The outputs first: a typo in --heatmap costs nothing.
@@ -89,9 +89,13 @@ pub fn run(args: &CompareArgs) -> ExitCode {
             return code;
         }
     }
+    let outputs: Vec<&Path> = [&args.heatmap, &args.side_by_side].into_iter().flatten().map(PathBuf::as_path).collect();
+    if let Err(err) = gdsky::engine::check_outputs_apart(&outputs, &[args.a.as_path(), args.b.as_path()]) {
+        return super::fail(err);
+    }
     let read = |path: &PathBuf| {
         skyrun::read_exr(path).map_err(|err| {
-            eprintln!("error: {err}");
+            errln!("error: {err}");
             ExitCode::from(2)
         })
     };
@@ -100,7 +104,7 @@ pub fn run(args: &CompareArgs) -> ExitCode {
         (Err(code), _) | (_, Err(code)) => return code,
     };
     if (a.width, a.height) != (b.width, b.height) {
-        eprintln!(
+        errln!(
             "error: {} is {}x{} but {} is {}x{}",
             args.a.display(),
             a.width,
@@ -112,56 +116,61 @@ pub fn run(args: &CompareArgs) -> ExitCode {
         return ExitCode::from(1);
     }
     let m = skyrun::compare(&a.pixels, &b.pixels, args.floor);
-    println!(
+    outln!(
         "max_rel={:.6e} mean_rel={:.6e} p999_rel={:.6e} nan={} inf={} pixels={}",
-        m.max_rel, m.mean_rel, m.p999_rel, m.nan, m.inf, m.pixels
+        m.max_rel,
+        m.mean_rel,
+        m.p999_rel,
+        m.nan,
+        m.inf,
+        m.pixels
     );
-    eprintln!("p99_rel={:.6e} psnr={:.2} dB", m.p99_rel, m.psnr_db);
+    errln!("p99_rel={:.6e} psnr={:.2} dB", m.p99_rel, m.psnr_db);
     for p in skyrun::worst_pixels(&a.pixels, &b.pixels, args.floor, a.width as usize, 3) {
-        eprintln!("  worst {p}");
+        errln!("  worst {p}");
     }
     if let Some(path) = &args.heatmap {
         if let Err(err) = skyrun::write_heatmap_png(path, &a, &b, args.floor) {
-            eprintln!("error: {err}");
+            errln!("error: {err}");
             return ExitCode::from(2);
         }
-        eprintln!("wrote {}", path.display());
+        errln!("wrote {}", path.display());
     }
     if let Some(path) = &args.side_by_side {
         let written = skyrun::write_side_by_side_png(path, &[&a, &b], skyrun::DEFAULT_EXPOSURE, skyrun::DEFAULT_WHITE);
         if let Err(err) = written {
-            eprintln!("error: {err}");
+            errln!("error: {err}");
             return ExitCode::from(2);
         }
-        eprintln!("wrote {}", path.display());
+        errln!("wrote {}", path.display());
     }
     let mut failed = match args.max_rel {
         Some(bound) if m.max_rel > bound || m.nan + m.inf > 0 => {
-            eprintln!(
-                "FAIL: max_rel {:.3e} > {bound:e} or non-finite channels ({} NaN, {} Inf)",
-                m.max_rel, m.nan, m.inf
-            );
+            errln!("FAIL: max_rel {:.3e} > {bound:e} or non-finite channels ({} NaN, {} Inf)", m.max_rel, m.nan, m.inf);
             true
         }
         _ => false,
     };
     if args.mode == Mode::Stats {
         let s = skyrun::compare_stats(&a.pixels, &b.pixels, a.width as usize, a.height as usize, args.floor);
-        println!("{s}");
+        outln!("{s}");
         let (c, r) = skyrun::STATS_GRID;
-        eprintln!(
+        errln!(
             "regions {c}x{r}: worst mean at {:?}, worst variance at {:?}; {} non-finite pixel(s) left out",
-            s.worst_mean_region, s.worst_var_region, s.non_finite
+            s.worst_mean_region,
+            s.worst_var_region,
+            s.non_finite
         );
         if let Some(min) = args.min_ssim.filter(|min| s.ssim.is_nan() || s.ssim < *min) {
-            eprintln!("FAIL: ssim {:.6} < {min}", s.ssim);
+            errln!("FAIL: ssim {:.6} < {min}", s.ssim);
             failed = true;
         }
         let region = s.region_mean_max_rel.max(s.region_var_max_rel);
         if let Some(max) = args.max_region_rel.filter(|max| region.is_nan() || region > *max) {
-            eprintln!(
+            errln!(
                 "FAIL: region error {region:.3e} > {max:e} (mean {:.3e}, variance {:.3e})",
-                s.region_mean_max_rel, s.region_var_max_rel
+                s.region_mean_max_rel,
+                s.region_var_max_rel
             );
             failed = true;
         }

@@ -3,7 +3,7 @@
 
 use clap::Args;
 use gdsky::engine::{self, Error, Input, convert::ConvertOptions};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 #[derive(Args)]
@@ -58,7 +58,7 @@ fn convert(args: &ConvertArgs) -> Result<(), Error> {
         })
         .collect::<Result<Vec<_>, _>>()?;
     let input = Input::open(Some(&args.file))?;
-    eprint!("{}", input.warnings);
+    err!("{}", input.warnings);
     // Where the outputs go is checked before any work: -o DIR is created when missing (from its
     // nearest existing ancestor), and none of the three files may be a directory or special file.
     let stem = match &input.shader {
@@ -67,6 +67,9 @@ fn convert(args: &ConvertArgs) -> Result<(), Error> {
     };
     let names = ["wgsl", "spv", "json"].map(|ext| format!("{stem}.{ext}"));
     engine::check_output_dir(&args.out_dir, true, &names.each_ref().map(String::as_str))?;
+    let outputs: Vec<PathBuf> = names.iter().map(|n| args.out_dir.join(n)).collect();
+    let inputs: Vec<&Path> = [Some(args.file.as_path()), input.shader.as_deref()].into_iter().flatten().collect();
+    engine::check_outputs_apart(&outputs.iter().map(PathBuf::as_path).collect::<Vec<_>>(), &inputs)?;
     let options = gdsky::Options::new()
         .debanding(args.lowering.debanding)
         .sky_coords(args.lowering.sky_coords)
@@ -75,7 +78,7 @@ fn convert(args: &ConvertArgs) -> Result<(), Error> {
     let mut options = ConvertOptions { input: Some(input), sets, bake_scene: args.bake_scene, options };
     options.options.lowering.overrides = args.overrides.clone();
     let converted = engine::convert::convert(&options)?;
-    eprint!("{}", converted.warnings);
+    err!("{}", converted.warnings);
     let json = converted.reflection_json() + "\n";
     let spirv = converted.spirv_bytes();
     engine::create_output_dir(&args.out_dir)?;
@@ -89,7 +92,7 @@ fn convert(args: &ConvertArgs) -> Result<(), Error> {
     skycore::io::write_set(&files)
         .map_err(|err| Error::environment(format!("cannot write into {}: {err}", args.out_dir.display())))?;
     for (path, bytes) in files {
-        println!("wrote {} ({} bytes)", path.display(), bytes.len());
+        outln!("wrote {} ({} bytes)", path.display(), bytes.len());
     }
     Ok(())
 }

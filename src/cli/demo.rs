@@ -22,6 +22,6 @@ fn demo_command(args: &DemoArgs) -> Result<(), Error> {
     let bar = Bar::new();
     let report = demo::demo(&args.out_dir, &bar)?;
     drop(bar);
-    print!("{}", report.text);
+    out!("{}", report.text);
     if report.pass { Ok(()) } else { Err(Error::input("the converted sky is not within the bound")) }
 }

@@ -1,5 +1,22 @@
 //! One module per subcommand, and what they share.
 
+/// `println!` that never panics (see [`edge`]).
+macro_rules! outln {
+    ($($arg:tt)*) => { $crate::cli::edge::out(format_args!("{}\n", format_args!($($arg)*))) };
+}
+/// `print!` that never panics (see [`edge`]).
+macro_rules! out {
+    ($($arg:tt)*) => { $crate::cli::edge::out(format_args!($($arg)*)) };
+}
+/// `eprintln!` that never panics (see [`edge`]).
+macro_rules! errln {
+    ($($arg:tt)*) => { $crate::cli::edge::err(format_args!("{}\n", format_args!($($arg)*))) };
+}
+/// `eprint!` that never panics (see [`edge`]).
+macro_rules! err {
+    ($($arg:tt)*) => { $crate::cli::edge::err(format_args!($($arg)*)) };
+}
+
 pub mod animate;
 pub mod bake_lut;
 pub mod bench;
@@ -7,6 +24,7 @@ pub mod check;
 pub mod compare;
 pub mod convert;
 pub mod demo;
+pub mod edge;
 pub mod oracle;
 pub mod progress;
 pub mod render;
@@ -27,7 +45,7 @@ pub fn color() -> bool {
 /// Prints an engine's error on stderr and gives its exit code (1 wrong input, 2 wrong
 /// environment: the CLI contract).
 pub fn fail(err: Error) -> ExitCode {
-    eprint!("{}", err.render(color()));
+    err!("{}", err.render(color()));
     ExitCode::from(err.exit_code())
 }
 
@@ -58,13 +76,13 @@ pub fn check_output(path: &Path) -> Result<(), ExitCode> {
 
 /// Prints `message` as an error and gives exit code 1: the input is wrong (CLI contract).
 pub fn usage(message: impl std::fmt::Display) -> ExitCode {
-    eprintln!("error: {message}");
+    errln!("error: {message}");
     ExitCode::from(1)
 }
 
 /// Prints `message` as an error and gives exit code 2: the environment is wrong (no adapter, a
 /// file that cannot be read or written).
 pub fn environment(message: impl std::fmt::Display) -> ExitCode {
-    eprintln!("error: {message}");
+    errln!("error: {message}");
     ExitCode::from(2)
 }

@@ -54,9 +54,9 @@ fn oracle(args: &OracleArgs) -> Result<(), Error> {
         root: args.oracle_root.clone().unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR"))),
     };
     let image = engine::oracle::render(&options, &Notes)?;
-    println!("{}", engine::write_image(&image, &args.out)?);
+    outln!("{}", engine::write_image(&image, &args.out)?);
     if let Some(png) = &args.png {
-        println!("{}", engine::write_image(&image, png)?);
+        outln!("{}", engine::write_image(&image, png)?);
     }
     Ok(())
 }

@@ -22,7 +22,7 @@ impl Bar {
 
 impl Progress for Bar {
     fn note(&self, text: &str) {
-        self.0.suspend(|| eprintln!("{text}"));
+        self.0.suspend(|| errln!("{text}"));
     }
 
     fn start(&self, steps: u64) {

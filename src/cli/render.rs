@@ -59,7 +59,7 @@ pub fn run(args: &RenderArgs, matches: &ArgMatches) -> ExitCode {
 
 fn render(args: &RenderArgs, matches: &ArgMatches) -> Result<(), Error> {
     let input = Input::open(args.file.as_deref())?;
-    eprint!("{}", input.warnings);
+    err!("{}", input.warnings);
     let mut scene = args.scene.clone();
     let mut skip = args.skip.clone();
     if let Some(file) = &input.scene {
@@ -73,6 +73,18 @@ fn render(args: &RenderArgs, matches: &ArgMatches) -> Result<(), Error> {
         // Derived outputs are checked before any work too.
         engine::check_image_output(png)?;
     }
+    // No output over an input: the shader, the scene file or material, its textures, the mask.
+    let textures = setup.textures.iter().filter_map(|t| t.split_once('=').map(|(_, p)| PathBuf::from(p)));
+    let scene_textures = input.scene.iter().flat_map(|s| s.textures.iter().map(|t| t.path.clone()));
+    let inputs: Vec<PathBuf> = [args.file.clone(), input.shader.clone(), skip.occluder.clone()]
+        .into_iter()
+        .flatten()
+        .chain(textures)
+        .chain(scene_textures)
+        .collect();
+    let outputs: Vec<&Path> =
+        [Some(&args.out), args.png.as_ref(), trace_png.as_ref()].into_iter().flatten().map(PathBuf::as_path).collect();
+    engine::check_outputs_apart(&outputs, &inputs.iter().map(PathBuf::as_path).collect::<Vec<_>>())?;
     let occluder = skip.occluder(&setup.views()?, setup.width, setup.height)?;
     let options = RenderOptions {
         shader: input.shader,
@@ -91,13 +103,13 @@ fn render(args: &RenderArgs, matches: &ArgMatches) -> Result<(), Error> {
     let rendered = engine::render::render(&options, &bar)?;
     drop(bar);
     let (convert, gpu, total) = (rendered.convert_time, rendered.gpu_time, rendered.total_time);
-    eprintln!("convert {convert:.2?}, GPU {gpu:.2?}, total {total:.2?}");
+    errln!("convert {convert:.2?}, GPU {gpu:.2?}, total {total:.2?}");
     write_outputs(&rendered.image, &args.out, args.png.as_ref())?;
     if let (Some(trace), Some(png)) = (&rendered.trace, &trace_png) {
-        print!("{}", trace.text);
+        out!("{}", trace.text);
         if !trace.overlay.is_empty() {
             skyrun::write_overlay_png(png, &rendered.image, &trace.overlay).map_err(Error::environment)?;
-            println!("wrote {}", png.display());
+            outln!("wrote {}", png.display());
         }
     }
     Ok(())
@@ -117,9 +129,9 @@ pub fn check_outputs(out: &Path, png: Option<&PathBuf>) -> Result<(), Error> {
 
 /// Writes the image and, when asked, the PNG preview; says what it wrote.
 pub fn write_outputs(image: &skyrun::Image, out: &Path, png: Option<&PathBuf>) -> Result<(), Error> {
-    println!("{}", engine::write_image(image, out)?);
+    outln!("{}", engine::write_image(image, out)?);
     if let Some(png) = png {
-        println!("{}", engine::write_image(image, png)?);
+        outln!("{}", engine::write_image(image, png)?);
     }
     Ok(())
 }
@@ -180,7 +192,7 @@ fn reference(args: &ReferenceArgs) -> Result<(), Error> {
                 .collect(),
         })
         .collect();
-    eprintln!("skyref {:?}: {:.2?}", args.precision, started.elapsed());
+    errln!("skyref {:?}: {:.2?}", args.precision, started.elapsed());
     let image = skyrun::Image::side_by_side(rendered, width, height).map_err(Error::input)?;
     write_outputs(&image, &args.out, args.png.as_ref())
 }

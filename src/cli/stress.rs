@@ -43,7 +43,7 @@ pub fn run(args: &StressArgs) -> ExitCode {
 
 fn stress_command(args: &StressArgs) -> Result<(), Error> {
     let input = Input::open(args.file.as_deref())?;
-    eprint!("{}", input.warnings);
+    err!("{}", input.warnings);
     let options = StressOptions {
         shader: input.shader,
         scene_file: input.scene,
@@ -53,7 +53,7 @@ fn stress_command(args: &StressArgs) -> Result<(), Error> {
         textures: args.textures.clone(),
     };
     let report = stress::stress(&options, &Bar::new())?;
-    print!("{}", report.text);
+    out!("{}", report.text);
     let (nan, inf) = report.nonfinite_at_defaults;
     // A quick run is CI's: NaN or Inf at the shader's own defaults fails it.
     if args.quick && nan + inf > 0 {

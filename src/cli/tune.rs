@@ -78,7 +78,7 @@ fn tune_command(args: &TuneArgs) -> Result<(), Error> {
         out_dir: args.out_dir.clone(),
     };
     let report = tune::tune(&options, &Bar::new())?;
-    print!("{}", report.text);
+    out!("{}", report.text);
     if report.shader.is_none() {
         // Nothing met the budget: the input asked for what the shader cannot give.
         return Err(Error::input("no configuration is within the budget"));

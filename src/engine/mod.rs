@@ -28,7 +28,8 @@ mod textures;
 
 pub use input::{Input, bake_reason, check_override_conflicts, override_names, warn_unapplied};
 pub use output::{
-    ImageFormat, check_image_output, check_output_dir, create_output_dir, open_gpu, write_file, write_image,
+    ImageFormat, check_image_output, check_output_dir, check_outputs_apart, create_output_dir, open_gpu, write_file,
+    write_image,
 };
 pub use setup::Setup;
 
@@ -124,6 +125,8 @@ pub struct Notes;
 
 impl Progress for Notes {
     fn note(&self, text: &str) {
-        eprintln!("{text}");
+        // Never a panic at the process edge: a note that cannot be written is dropped.
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stderr().lock(), "{text}");
     }
 }

@@ -70,6 +70,26 @@ pub fn check_output_dir(dir: &Path, create: bool, files: &[&str]) -> Result<(), 
     Ok(())
 }
 
+/// Refuses, before any work, an output that is one of the command's inputs (through any link) or
+/// that is named twice: the write would destroy the input, or one output would replace the other.
+/// Wrong input naming both.
+pub fn check_outputs_apart(outputs: &[&Path], inputs: &[&Path]) -> Result<(), Error> {
+    for (i, out) in outputs.iter().enumerate() {
+        if let Some(input) = inputs.iter().find(|input| skycore::io::same_file(out, input)) {
+            return Err(Error::input(format!(
+                "{} is an input of this command ({}): gdsky does not write over its inputs; choose another output",
+                out.display(),
+                input.display()
+            )));
+        }
+        let twice = outputs[..i].iter().any(|o| o == out || skycore::io::same_file(o, out));
+        if twice {
+            return Err(Error::input(format!("{} is named as two outputs of this command", out.display())));
+        }
+    }
+    Ok(())
+}
+
 /// Creates an output folder (when the outputs are ready, after [`check_output_dir`]).
 pub fn create_output_dir(dir: &Path) -> Result<(), Error> {
     skycore::io::create_output_dir(dir)

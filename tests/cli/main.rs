@@ -16,6 +16,7 @@ mod glsl_semantics;
 mod godot_materials;
 mod lavapipe_loop_limit;
 mod overrides;
+mod process_edge;
 mod render;
 mod safe_io;
 mod scene_files;

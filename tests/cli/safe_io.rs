@@ -335,3 +335,41 @@ fn non_finite_and_out_of_range_flags_are_refused() {
     }
     assert!(!bench_out.exists());
 }
+
+/// An output that is an input (directly or through a link), or one output named twice, is
+/// refused before any work (issue #22, item 5): exit 1, the input untouched.
+#[test]
+fn an_output_over_an_input_is_refused_before_any_work() {
+    let dir = dir("output_is_input");
+    let shader = dir.join("u.gdshader");
+    let source = "shader_type sky;\nvoid sky() { COLOR = vec3(0.2, 0.4, 0.8); }\n";
+    std::fs::write(&shader, source).expect("write");
+    let link = dir.join("link.exr");
+    symlink(&shader, &link).expect("symlink");
+    let exr = dir.join("a.exr");
+    let made = gdsky(&["render", arg(&shader), "-o", arg(&exr), "--size", "8x4"]);
+    assert!(made.status.success(), "{}", text(&made));
+    let before = std::fs::read(&exr).expect("a.exr");
+    let json = dir.join("u.json");
+    std::fs::write(&json, source).expect("write");
+
+    // (`render u.gdshader -o u.gdshader` is refused by its extension already.)
+    let cases: Vec<(Vec<&str>, &Path)> = vec![
+        (vec!["render", arg(&shader), "-o", arg(&link), "--size", "8x4"], &shader),
+        (vec!["compare", arg(&exr), arg(&exr), "--heatmap", arg(&exr)], &exr),
+        (vec!["convert", arg(&json), "-o", arg(&dir)], &json),
+    ];
+    for (args, input) in cases {
+        let was = std::fs::read(input).expect("input");
+        let out = gdsky(&args);
+        let said = text(&out);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {said}");
+        assert!(said.contains("gdsky does not write over its inputs"), "{args:?}: {said}");
+        assert_eq!(std::fs::read(input).expect("input"), was, "{args:?}: the input is untouched");
+    }
+    let png = dir.join("p.png");
+    let twice = gdsky(&["render", arg(&shader), "-o", arg(&png), "--png", arg(&png), "--size", "8x4"]);
+    assert_eq!(twice.status.code(), Some(1), "{}", text(&twice));
+    assert!(text(&twice).contains("named as two outputs"), "{}", text(&twice));
+    assert_eq!(std::fs::read(&exr).expect("a.exr"), before);
+}

@@ -268,6 +268,27 @@ pub fn check_output(path: &Path) -> io::Result<PathBuf> {
     Ok(target)
 }
 
+/// Whether `a` and `b` name the same existing file, through any symbolic or hard link (the same
+/// device and inode). An output that is an input would be destroyed by the write that makes it:
+/// commands refuse it before any work.
+pub fn same_file(a: &Path, b: &Path) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        match (fs::metadata(a), fs::metadata(b)) {
+            (Ok(x), Ok(y)) => x.dev() == y.dev() && x.ino() == y.ino(),
+            _ => false,
+        }
+    }
+    #[cfg(not(unix))]
+    {
+        match (fs::canonicalize(a), fs::canonicalize(b)) {
+            (Ok(x), Ok(y)) => x == y,
+            _ => false,
+        }
+    }
+}
+
 /// Checks, before any work, that `dir` can hold a command's outputs: an existing directory (links
 /// followed) in which a file can be created, or, when `create` is true (the command creates its
 /// output folder), a path whose nearest existing ancestor is such a directory. Nothing is created

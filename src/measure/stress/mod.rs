@@ -257,10 +257,8 @@ pub fn stress(options: &StressOptions, progress: &dyn Progress) -> Result<Stress
     let adapter = gpu.adapter_info();
     let mut shader = loaded.compile(&gpu)?;
     // The NaN/Inf trace, rendered for the cases whose GPU render has any.
-    let traced = gdsky_naga::trace::instrument(&loaded.front, &loaded.lowered).map_err(|diagnostics| {
-        eprint!("{}", gdshader::diag::render_human(&loaded.front.db, &diagnostics, false));
-        Error::input("failed")
-    })?;
+    let traced = gdsky_naga::trace::instrument(&loaded.front, &loaded.lowered)
+        .map_err(|diagnostics| Error::input(loaded.render(&diagnostics)))?;
     let traced_wgsl =
         gdsky_naga::to_wgsl(&traced.lowered).map_err(|e| Error::input(e.diagnostic(&loaded.front).message))?;
     let mut traced_shader = loaded.compile_wgsl(&gpu, &traced_wgsl)?;
