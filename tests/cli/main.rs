@@ -5,6 +5,7 @@
 mod animate;
 mod bake_lut;
 mod bench_cli;
+mod budgets;
 mod check;
 mod compare_stats;
 mod convert;

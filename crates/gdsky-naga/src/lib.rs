@@ -33,8 +33,8 @@ mod widen;
 
 pub use emit::{EmitError, SpirvOptions, exact_arithmetic, reread_wgsl, to_spirv, to_spirv_with, to_wgsl};
 pub use lower::{
-    Debanding, GLOBAL_UNIFORM_GROUP, LowerOptions, Lowered, MATERIAL_GROUP, Precision, SkyCoords, TextureSlot,
-    UniformSlot, depth_convention, lower,
+    Debanding, GLOBAL_UNIFORM_GROUP, LowerOptions, Lowered, MATERIAL_GROUP, MAX_UNIFORM_BINDING_BYTES, Precision,
+    SkyCoords, TextureSlot, UniformSlot, depth_convention, lower,
 };
 pub use valid::{validate, validator, validator_f64};
 pub use widen::{F64_MATH_WGSL, F64Output};

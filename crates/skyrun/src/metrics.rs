@@ -127,7 +127,10 @@ pub fn compare(a: &[[f32; 4]], b: &[[f32; 4]], floor: f32) -> Metrics {
 }
 
 /// The `count` channels with the largest relative error (non-finite values first), worst
-/// first, located in a `width`-wide image.
+/// first (ties: the earlier pixel, then channel, first), located in a `width`-wide image.
+///
+/// A bounded selection, not a sort of every channel: memory is O(`count`) whatever the image
+/// size (a cubemap strip of six 4096² faces has 302 million channels).
 ///
 /// # Panics
 ///
@@ -135,24 +138,29 @@ pub fn compare(a: &[[f32; 4]], b: &[[f32; 4]], floor: f32) -> Metrics {
 pub fn worst_pixels(a: &[[f32; 4]], b: &[[f32; 4]], floor: f32, width: usize, count: usize) -> Vec<PixelDiff> {
     assert_eq!(a.len(), b.len(), "images of different sizes");
     assert!(width > 0, "width must be positive");
-    let mut all: Vec<PixelDiff> = a
-        .iter()
-        .zip(b)
-        .enumerate()
-        .flat_map(|(i, (pa, pb))| {
-            (0..3).map(move |c| PixelDiff {
-                x: i % width,
-                y: i / width,
-                channel: c,
-                a: *pa,
-                b: *pb,
-                rel: rel(pa[c], pb[c], floor),
-            })
-        })
-        .collect();
-    all.sort_by(|p, q| q.rel.total_cmp(&p.rel));
-    all.truncate(count);
-    all
+    // More than every channel cannot be asked for (and would overflow the reservation below).
+    let count = count.min(3 * a.len());
+    if count == 0 {
+        return Vec::new();
+    }
+    // (relative error, pixel index, channel), worst first.
+    type Candidate = (f64, usize, usize);
+    let worst_first = |p: &Candidate, q: &Candidate| q.0.total_cmp(&p.0).then(p.1.cmp(&q.1)).then(p.2.cmp(&q.2));
+    let mut kept: Vec<Candidate> = Vec::with_capacity(2 * count + 1);
+    for (i, (pa, pb)) in a.iter().zip(b).enumerate() {
+        for c in 0..3 {
+            kept.push((rel(pa[c], pb[c], floor), i, c));
+            if kept.len() > 2 * count {
+                kept.select_nth_unstable_by(count, worst_first);
+                kept.truncate(count);
+            }
+        }
+    }
+    kept.sort_by(worst_first);
+    kept.truncate(count);
+    kept.into_iter()
+        .map(|(rel, i, channel)| PixelDiff { x: i % width, y: i / width, channel, a: a[i], b: b[i], rel })
+        .collect()
 }
 
 /// Columns and rows of the region grid of [`compare_stats`]: 8 × 4 regions, each 1/8 of the

@@ -154,3 +154,45 @@ fn shader_defaults_equal_skyrefs_hand_written_defaults() {
         Err(MaterialError::BadValue { .. })
     ));
 }
+
+/// The bounded selection of `worst_pixels` gives what sorting every channel gives (the obvious
+/// algorithm, which needed memory for every channel), ties included, for every count.
+#[test]
+fn worst_pixels_selects_what_a_full_sort_selects() {
+    // A deterministic pseudo-random image with repeated values (ties) and a NaN.
+    let mut state = 0x2545_f491_u32;
+    let mut next = || {
+        state ^= state << 13;
+        state ^= state >> 17;
+        state ^= state << 5;
+        (state % 7) as f32 * 0.25
+    };
+    let a: Vec<[f32; 4]> = (0..300).map(|_| [next(), next(), next(), 1.0]).collect();
+    let mut b: Vec<[f32; 4]> = (0..300).map(|_| [next(), next(), next(), 1.0]).collect();
+    b[77][1] = f32::NAN;
+    let width = 20;
+    let mut all: Vec<crate::PixelDiff> = crate::worst_pixels(&a, &b, 1e-4, width, usize::MAX / 4);
+    assert_eq!(all.len(), 900);
+    // The reference: every channel, stably sorted worst first (pixel order breaks ties).
+    let mut reference: Vec<(f64, usize, usize)> = Vec::new();
+    for (i, (pa, pb)) in a.iter().zip(&b).enumerate() {
+        for c in 0..3 {
+            let rel = if pa[c].is_finite() && pb[c].is_finite() {
+                (f64::from(pa[c]) - f64::from(pb[c])).abs() / f64::from(pb[c]).abs().max(1e-4)
+            } else {
+                f64::INFINITY
+            };
+            reference.push((rel, i, c));
+        }
+    }
+    reference.sort_by(|p, q| q.0.total_cmp(&p.0));
+    for count in [1, 2, 3, 10, 37, 899, 900, 1000] {
+        let got = crate::worst_pixels(&a, &b, 1e-4, width, count);
+        let want: Vec<(usize, usize, usize)> =
+            reference.iter().take(count).map(|&(_, i, c)| (i % width, i / width, c)).collect();
+        let got: Vec<(usize, usize, usize)> = got.iter().map(|d| (d.x, d.y, d.channel)).collect();
+        assert_eq!(got, want, "count {count}");
+    }
+    all.truncate(1);
+    assert_eq!((all[0].x, all[0].y, all[0].channel), (77 % width, 77 / width, 1), "NaN first");
+}

@@ -29,8 +29,10 @@ use std::collections::{BTreeSet, HashMap};
 use types::{Scalar, StructId, Type};
 
 /// Largest array length accepted. Godot sets no limit; GPUs do, and a size like 2,000,000,000
-/// is a mistake that would otherwise exhaust memory later.
-pub const MAX_ARRAY_LEN: i64 = 65_536;
+/// is a mistake that would otherwise exhaust memory later. 65,532: one SPIR-V instruction holds
+/// at most 65,535 words (its word count is 16 bits), and a composite of N elements (an array's
+/// constant or construction) takes N + 3 of them.
+pub const MAX_ARRAY_LEN: i64 = 65_532;
 
 /// A checked shader: the tree plus what the checker learned about it.
 #[derive(Debug)]

@@ -74,6 +74,9 @@ use wrapper::Builtins;
 pub const MATERIAL_GROUP: u32 = 1;
 /// The bind group of Godot's global uniforms (`global uniform`), binding 0.
 pub const GLOBAL_UNIFORM_GROUP: u32 = 3;
+/// The largest uniform block gdsky emits: 64 KiB, WebGPU's (and wgpu's) default
+/// `maxUniformBufferBindingSize`, which every adapter offers.
+pub const MAX_UNIFORM_BINDING_BYTES: u32 = 65_536;
 
 /// Where a uniform lives in the material block.
 #[derive(Clone, Debug)]
@@ -386,8 +389,33 @@ impl<'a> Lowerer<'a> {
         }
         if let Some(size) = self.uniform_block(members, "Material", "material", MATERIAL_GROUP) {
             self.material_size = size;
+            self.check_binding_size("material", size, MATERIAL_GROUP);
         }
-        self.uniform_block(globals, "GlobalUniforms", "global_uniforms", GLOBAL_UNIFORM_GROUP);
+        if let Some(size) = self.uniform_block(globals, "GlobalUniforms", "global_uniforms", GLOBAL_UNIFORM_GROUP) {
+            self.check_binding_size("global uniform", size, GLOBAL_UNIFORM_GROUP);
+        }
+    }
+
+    /// A uniform block larger than one uniform binding holds would convert and then fail when a
+    /// host binds it, with a driver's message and no location: refused here, at its largest
+    /// uniform.
+    fn check_binding_size(&mut self, what: &str, size: u32, group: u32) {
+        if size <= MAX_UNIFORM_BINDING_BYTES {
+            return;
+        }
+        let largest = self.uniforms.iter().filter(|(_, s)| s.group == group).max_by_key(|(_, s)| s.size);
+        let Some((name, slot)) = largest.map(|(n, s)| (n.clone(), s.clone())) else { return };
+        let at = self.uniform_span(&name);
+        let stride = slot.stride.map(|s| format!(", {s} bytes an element")).unwrap_or_default();
+        self.error(
+            at,
+            format!(
+                "the {what} block is {size} bytes, more than one uniform binding holds ({MAX_UNIFORM_BINDING_BYTES}: \
+                 WebGPU's and wgpu's default maxUniformBufferBindingSize); its largest uniform, `{name}`, takes {} \
+                 bytes{stride}",
+                slot.size
+            ),
+        );
     }
 
     /// Declares a uniform block of `members` (name, naga type, shader type) at binding 0 of
