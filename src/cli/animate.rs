@@ -50,6 +50,7 @@ pub fn run(args: &AnimateArgs, matches: &ArgMatches) -> ExitCode {
 }
 
 fn animate_command(args: &AnimateArgs, matches: &ArgMatches) -> Result<(), Error> {
+    super::watch_driver(Some(&args.scene_file))?;
     if !gdsky::scene::is_scene_path(&args.scene_file) && !gdsky::scene::is_godot_resource(&args.scene_file) {
         return Err(Error::input(format!(
             "{}: `animate` takes a scene file (.toml) or a Godot material or scene (.tres, .tscn)",

@@ -136,6 +136,7 @@ pub fn run(args: &BenchArgs, matches: &ArgMatches) -> ExitCode {
 }
 
 fn bench(args: &BenchArgs, matches: &ArgMatches) -> Result<(), Error> {
+    super::watch_driver(args.files.first().map(PathBuf::as_path))?;
     let input = Input::open(args.files.first().map(PathBuf::as_path))?;
     err!("{}", input.warnings);
     let mut shaders = vec![input.shader.clone()];

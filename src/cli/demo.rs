@@ -19,6 +19,7 @@ pub fn run(args: &DemoArgs) -> ExitCode {
 }
 
 fn demo_command(args: &DemoArgs) -> Result<(), Error> {
+    super::watch_driver(None)?;
     let bar = Bar::new();
     let report = demo::demo(&args.out_dir, &bar)?;
     drop(bar);

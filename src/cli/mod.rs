@@ -37,6 +37,51 @@ use std::io::IsTerminal;
 use std::path::Path;
 use std::process::ExitCode;
 
+/// The environment variable that sets the driver budget in seconds (0: no watch).
+pub const DRIVER_BUDGET_VAR: &str = "GDSKY_DRIVER_BUDGET";
+
+/// The driver budget when [`DRIVER_BUDGET_VAR`] is unset: far above any real sky's pipeline build
+/// on lavapipe (the Freeman sky's takes about a second, the heaviest corpus shader's a few), far
+/// below "hung".
+pub const DEFAULT_DRIVER_BUDGET_S: u64 = 120;
+
+/// What the command works on, for the driver budget's message (set once by [`watch_driver`]).
+static SUBJECT: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+
+/// Watches the driver for a GPU command on `subject` (its FILE; `None`: the bundled Freeman sky):
+/// a pipeline build or a render's wait that passes the budget ends the command with exit 1 and
+/// a message naming the shader, the budget and how to raise it (`skyrun::DriverBudget`). The
+/// budget is [`DEFAULT_DRIVER_BUDGET_S`] unless `GDSKY_DRIVER_BUDGET=SECONDS` says otherwise;
+/// wrong input when that is not a whole number of seconds.
+pub fn watch_driver(subject: Option<&Path>) -> Result<(), Error> {
+    let seconds = match std::env::var(DRIVER_BUDGET_VAR) {
+        Err(_) => DEFAULT_DRIVER_BUDGET_S,
+        Ok(text) => text.trim().parse::<u64>().map_err(|_| {
+            Error::input(format!("{DRIVER_BUDGET_VAR}={text}: expected a whole number of seconds (0: no budget)"))
+        })?,
+    };
+    if seconds == 0 {
+        return Ok(());
+    }
+    let name = subject.map_or_else(|| gdsky::engine::BUNDLED_NAME.to_string(), |p| p.display().to_string());
+    let _ = SUBJECT.set(name);
+    skyrun::set_driver_budget(skyrun::DriverBudget {
+        limit: std::time::Duration::from_secs(seconds),
+        expired: driver_expired,
+    });
+    Ok(())
+}
+
+fn driver_expired(what: &str, limit: std::time::Duration) -> ! {
+    let subject = SUBJECT.get().map(String::as_str).unwrap_or("the shader");
+    errln!(
+        "error: {subject}: {what} took longer than {} s, the driver budget; raise it with {DRIVER_BUDGET_VAR}=SECONDS \
+         (0: no budget) if the shader is meant to be this heavy",
+        limit.as_secs()
+    );
+    std::process::exit(1);
+}
+
 /// Whether stderr shows colours: a terminal, and `NO_COLOR` unset.
 pub fn color() -> bool {
     std::io::stderr().is_terminal() && std::env::var_os("NO_COLOR").is_none()

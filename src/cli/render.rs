@@ -58,6 +58,7 @@ pub fn run(args: &RenderArgs, matches: &ArgMatches) -> ExitCode {
 }
 
 fn render(args: &RenderArgs, matches: &ArgMatches) -> Result<(), Error> {
+    super::watch_driver(args.file.as_deref())?;
     let input = Input::open(args.file.as_deref())?;
     err!("{}", input.warnings);
     let mut scene = args.scene.clone();

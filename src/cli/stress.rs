@@ -42,6 +42,7 @@ pub fn run(args: &StressArgs) -> ExitCode {
 }
 
 fn stress_command(args: &StressArgs) -> Result<(), Error> {
+    super::watch_driver(args.file.as_deref())?;
     let input = Input::open(args.file.as_deref())?;
     err!("{}", input.warnings);
     let options = StressOptions {

@@ -66,6 +66,7 @@ pub fn run(args: &TuneArgs) -> ExitCode {
 }
 
 fn tune_command(args: &TuneArgs) -> Result<(), Error> {
+    super::watch_driver(Some(&args.file))?;
     let options = TuneOptions {
         file: args.file.clone(),
         max_error: args.max_error,

@@ -121,6 +121,7 @@ mod passthrough;
 mod render;
 mod skip;
 mod textures;
+mod watchdog;
 mod wide;
 
 pub use gdsky_naga::reflect::TextureBinding;
@@ -145,6 +146,7 @@ pub use textures::{
     GODOT_VOLUME_GRID, MAX_ASSEMBLED_BYTES, MAX_TEXTURE_FILE_BYTES, MAX_TEXTURE_SIDE, MAX_VOLUME_SIDE, TexelFormat,
     TextureData, TextureError, TextureShape, check_texture, read_cube, read_texture, read_volume, texture_from_image,
 };
+pub use watchdog::{DriverBudget, set_driver_budget};
 pub use wide::{F64Error, F64Sky, render_f64};
 
 #[cfg(test)]

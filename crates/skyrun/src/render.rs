@@ -459,34 +459,38 @@ impl SkyShader {
         cache
             .entry((entry, format, depth))
             .or_insert_with(|| {
-                gpu.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                    label: Some(entry),
-                    layout: Some(&self.pipeline_layout),
-                    vertex: wgpu::VertexState {
-                        module: &self.module,
-                        entry_point: Some("vs_main"),
-                        compilation_options: options(),
-                        buffers: &[],
-                    },
-                    primitive: wgpu::PrimitiveState {
-                        topology: wgpu::PrimitiveTopology::TriangleList,
-                        cull_mode: None,
-                        ..Default::default()
-                    },
-                    depth_stencil: depth.map(depth_state),
-                    multisample: wgpu::MultisampleState::default(),
-                    fragment: Some(wgpu::FragmentState {
-                        module: &self.module,
-                        entry_point: Some(entry),
-                        compilation_options: options(),
-                        targets: &[Some(wgpu::ColorTargetState {
-                            format,
-                            blend: None,
-                            write_mask: wgpu::ColorWrites::ALL,
-                        })],
-                    }),
-                    multiview_mask: None,
-                    cache: None,
+                let what =
+                    move || format!("building the render pipeline of `{entry}` (the driver compiling the shader)");
+                crate::watchdog::watched(what, || {
+                    gpu.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                        label: Some(entry),
+                        layout: Some(&self.pipeline_layout),
+                        vertex: wgpu::VertexState {
+                            module: &self.module,
+                            entry_point: Some("vs_main"),
+                            compilation_options: options(),
+                            buffers: &[],
+                        },
+                        primitive: wgpu::PrimitiveState {
+                            topology: wgpu::PrimitiveTopology::TriangleList,
+                            cull_mode: None,
+                            ..Default::default()
+                        },
+                        depth_stencil: depth.map(depth_state),
+                        multisample: wgpu::MultisampleState::default(),
+                        fragment: Some(wgpu::FragmentState {
+                            module: &self.module,
+                            entry_point: Some(entry),
+                            compilation_options: options(),
+                            targets: &[Some(wgpu::ColorTargetState {
+                                format,
+                                blend: None,
+                                write_mask: wgpu::ColorWrites::ALL,
+                            })],
+                        }),
+                        multiview_mask: None,
+                        cache: None,
+                    })
                 })
             })
             .clone()
@@ -580,9 +584,11 @@ impl SkyShader {
                 let _ = stamp_sender.send(result);
             });
         }
-        device
-            .poll(wgpu::PollType::Wait { submission_index: Some(submission), timeout: Some(GPU_TIMEOUT) })
-            .map_err(|e| RenderError::Poll(e.to_string()))?;
+        let what = move || format!("rendering {width}x{height} (the device running the shader)");
+        crate::watchdog::watched(what, || {
+            device.poll(wgpu::PollType::Wait { submission_index: Some(submission), timeout: Some(GPU_TIMEOUT) })
+        })
+        .map_err(|e| RenderError::Poll(e.to_string()))?;
         let gpu_wait = submitted.elapsed();
         match mapped(device, &receiver) {
             Some(Ok(())) => {}
