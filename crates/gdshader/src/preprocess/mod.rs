@@ -1131,9 +1131,31 @@ impl Pp<'_> {
                 break;
             }
         }
+        // However the input's path is spelled (`x.gdshader` from inside the project has no
+        // parent to walk up from): the folders above it on disk too.
+        if found.is_none() && root_dir.is_relative() {
+            let absolute = std::path::absolute(if root_dir.as_os_str().is_empty() { Path::new(".") } else { &root_dir });
+            for dir in absolute.iter().flat_map(|a| a.ancestors()) {
+                if self.loader.load(&dir.join("project.godot")).is_ok() {
+                    found = Some(normalize(dir));
+                    break;
+                }
+            }
+        }
         let root = found.unwrap_or(root_dir);
         self.project_root = Some(root.clone());
         root
+    }
+
+    /// The folder an include must lie in: the project's (the folder of `project.godot`, as
+    /// Godot reads includes as `res://` resources), else the input's own folder. `None` when
+    /// `resolved` is inside it; the folder otherwise. Lexical, after `..` is resolved: the file
+    /// is not opened, so nothing of a file outside is read or shown.
+    fn outside_of(&mut self, resolved: &Path) -> Option<PathBuf> {
+        let root = self.project_root();
+        let absolute = |p: &Path| std::path::absolute(p).map(|a| normalize(&a)).unwrap_or_else(|_| normalize(p));
+        let (root_abs, path_abs) = (absolute(if root.as_os_str().is_empty() { Path::new(".") } else { &root }), absolute(resolved));
+        (!path_abs.starts_with(&root_abs)).then_some(root_abs)
     }
 
     fn resolve(&mut self, path: &str) -> PathBuf {
@@ -1193,6 +1215,20 @@ impl Pp<'_> {
             return;
         }
         if self.include_limit_hit {
+            return;
+        }
+        if let Some(root) = self.outside_of(&resolved) {
+            self.report(
+                Diagnostic::error(
+                    codes::PP_INCLUDE,
+                    format!("shader include `{written}` is outside the project ({})", root.display()),
+                )
+                .with_primary(file, at, "outside the project")
+                .with_note(
+                    "Godot reads includes from inside its project only (the folder of project.godot, or without one \
+                     the shader's own folder); the file was not read",
+                ),
+            );
             return;
         }
         if self.includes.len() >= MAX_INCLUDED_FILES {

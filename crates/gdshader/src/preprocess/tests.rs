@@ -444,6 +444,36 @@ fn includes() {
     assert!(r.diags.is_empty(), "{:?}", r.diags);
 }
 
+/// Includes are confined to the project (or, without one, the root file's folder), as Godot
+/// reads them as `res://` resources: a path outside is refused unread, whatever its spelling.
+#[test]
+fn includes_outside_the_project_are_refused_unread() {
+    let secret: &[u8] = b"SECRET-CONTENT\n";
+    for written in ["/etc/passwd", "res://../outside.txt", "../outside.txt", "res://lib/../../outside.txt"] {
+        let main = format!("#include \"{written}\"\n");
+        let r = run_files(&[
+            ("proj/shaders/main.gdshader", main.as_bytes()),
+            ("proj/project.godot", b"config_version=5\n"),
+            ("proj/outside.txt", b"float inside;\n"),
+            ("outside.txt", secret),
+            ("/etc/passwd", secret),
+        ]);
+        let shown: String = r.diags.iter().map(|d| format!("{} {:?}", d.message, d.notes)).collect();
+        // `../outside.txt` from proj/shaders is proj/outside.txt: inside, and read.
+        if written == "../outside.txt" {
+            assert!(r.diags.is_empty(), "{written}: {shown}");
+            continue;
+        }
+        assert_eq!(r.codes(), vec!["E016"], "{written}: {shown}");
+        assert!(shown.contains("outside the project"), "{written}: {shown}");
+        assert!(!r.out.text.contains("SECRET") && !shown.contains("SECRET"), "{written}: nothing of it is shown");
+        assert!(r.out.includes.is_empty(), "{written}: not read");
+    }
+    // Without project.godot, the root file's folder bounds them.
+    let r = run_files(&[("sky/main.gdshader", b"#include \"../x.gdshaderinc\"\n"), ("x.gdshaderinc", b"float x;\n")]);
+    assert_eq!(r.codes(), vec!["E016"]);
+}
+
 #[test]
 fn include_errors() {
     let r = run("a\n#include \"missing.gdshaderinc\"\n");
