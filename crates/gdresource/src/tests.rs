@@ -568,3 +568,24 @@ fn no_truncation_of_a_material_panics_the_loader() {
     std::fs::create_dir_all(dir.join("folder.tres")).unwrap();
     assert!(matches!(load_sky_material(&dir.join("folder.tres")), Err(MaterialError::Read(_))));
 }
+
+/// A resource path that leaves the project (`res://../…`, `../../…`, an absolute path) is an
+/// error naming it, and the file is not read: nothing of it reaches a message (issue #22).
+#[test]
+fn resource_paths_are_confined_to_the_project() {
+    for (i, written) in
+        ["res://../../../../../etc/passwd", "../../../../../etc/passwd", "/etc/passwd"].iter().enumerate()
+    {
+        let tres = format!(
+            "[gd_resource type=\"ShaderMaterial\" load_steps=2 format=3]\n\n[ext_resource type=\"Shader\" path=\"{written}\" id=\"1\"]\n\n[resource]\nshader = ExtResource(\"1\")\n"
+        );
+        let dir = project(&format!("confined_{i}"), &[("materials/sky.tres", tres.as_bytes())]);
+        let message = match crate::load_sky_material(&dir.join("materials/sky.tres")) {
+            Err(crate::MaterialError::Invalid(m)) => m,
+            Err(crate::MaterialError::Read(m)) => panic!("{written}: read, not refused: {m}"),
+            Ok(_) => panic!("{written}: loaded"),
+        };
+        assert!(message.contains("outside the project"), "{written}: {message}");
+        assert!(!message.contains("root:"), "{written}: nothing of /etc/passwd is shown: {message}");
+    }
+}

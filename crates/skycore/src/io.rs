@@ -268,6 +268,28 @@ pub fn check_output(path: &Path) -> io::Result<PathBuf> {
     Ok(target)
 }
 
+/// `path` with `.` and `..` resolved lexically (no file is touched, links are not followed): the
+/// form in which a path is compared with the folder it must stay in. A `..` above a root stays
+/// at the root; leading `..` of a relative path are kept.
+pub fn normalize(path: &Path) -> PathBuf {
+    use std::path::Component;
+    let mut out = PathBuf::new();
+    for c in path.components() {
+        match c {
+            Component::CurDir => {}
+            Component::ParentDir => match out.components().next_back() {
+                Some(Component::Normal(_)) => {
+                    out.pop();
+                }
+                Some(Component::RootDir | Component::Prefix(_)) => {}
+                _ => out.push(".."),
+            },
+            other => out.push(other.as_os_str()),
+        }
+    }
+    out
+}
+
 /// Whether `a` and `b` name the same existing file, through any symbolic or hard link (the same
 /// device and inode). An output that is an input would be destroyed by the write that makes it:
 /// commands refuse it before any work.

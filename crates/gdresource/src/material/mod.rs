@@ -718,20 +718,38 @@ fn check_header(doc: &Document, file: FileId, len: usize) -> Result<(), Failure>
 }
 
 /// Resolves a resource path written in `from`: `res://…` against the project root (the nearest
-/// folder above `from` holding `project.godot`), anything else against `from`'s folder.
+/// folder above `from` holding `project.godot`), anything else against `from`'s folder. The
+/// result must lie inside the project (or, without one, inside `from`'s folder), as Godot reads
+/// resources from its project only: a path outside is an error naming it, and the file is not
+/// read. The project is found however `from` is spelled (`tex.tres` from inside it too).
 pub(crate) fn resolve(from: &Path, written: &str) -> Result<PathBuf, String> {
-    let dir = from.parent().unwrap_or(Path::new(""));
-    if let Some(rest) = written.strip_prefix("res://") {
-        let start = std::fs::canonicalize(dir).unwrap_or_else(|_| dir.to_path_buf());
-        let root = start.ancestors().find(|d| d.join("project.godot").is_file()).ok_or_else(|| {
-            format!("`{written}`: no project.godot in {} or a folder above it, so res:// has no root", start.display())
-        })?;
-        return Ok(root.join(rest));
-    }
     if written.starts_with("uid://") || written.starts_with("user://") {
         return Err(format!("`{written}`: gdsky resolves res:// and relative paths only"));
     }
-    Ok(dir.join(written))
+    let dir = from.parent().unwrap_or(Path::new(""));
+    let here = if dir.as_os_str().is_empty() { Path::new(".") } else { dir };
+    let start = std::fs::canonicalize(here).unwrap_or_else(|_| here.to_path_buf());
+    let project = start.ancestors().find(|d| d.join("project.godot").is_file()).map(Path::to_path_buf);
+    let (path, checked, bound) = match written.strip_prefix("res://") {
+        Some(rest) => {
+            let root = project.ok_or_else(|| {
+                format!(
+                    "`{written}`: no project.godot in {} or a folder above it, so res:// has no root",
+                    start.display()
+                )
+            })?;
+            (root.join(rest), root.join(rest), root)
+        }
+        None => (dir.join(written), start.join(written), project.unwrap_or_else(|| start.clone())),
+    };
+    if !skycore::io::normalize(&checked).starts_with(&bound) {
+        return Err(format!(
+            "`{written}` is outside the project ({}): Godot reads resources from inside its project only (the \
+             folder of project.godot, or without one the resource's own folder); the file was not read",
+            bound.display()
+        ));
+    }
+    Ok(path)
 }
 
 impl SkyMaterial {

@@ -34,9 +34,10 @@ pub use source_map::SourceMap;
 use crate::diag::{Diagnostic, FileId, SourceDb, codes};
 use expand::{Expander, Limit, Macro, Sink, SrcCursor, Stop};
 use lex::{Kind, Tok};
+use skycore::io::normalize;
 use std::collections::HashSet;
 use std::ops::Range;
-use std::path::{Component, Path, PathBuf};
+use std::path::{Path, PathBuf};
 use std::rc::Rc;
 
 /// Reads the files `#include` names. The CLI reads from disk; tests and the fuzzer from memory.
@@ -236,25 +237,6 @@ fn find_word(hay: &str, word: &str) -> Option<usize> {
         from = at + 1;
     }
     None
-}
-
-/// Removes `.` and resolves `..` without touching the file system.
-fn normalize(path: &Path) -> PathBuf {
-    let mut out = PathBuf::new();
-    for c in path.components() {
-        match c {
-            Component::CurDir => {}
-            Component::ParentDir => match out.components().next_back() {
-                Some(Component::Normal(_)) => {
-                    out.pop();
-                }
-                Some(Component::RootDir | Component::Prefix(_)) => {}
-                _ => out.push(".."),
-            },
-            other => out.push(other.as_os_str()),
-        }
-    }
-    out
 }
 
 struct Pp<'a> {
@@ -1134,7 +1116,8 @@ impl Pp<'_> {
         // However the input's path is spelled (`x.gdshader` from inside the project has no
         // parent to walk up from): the folders above it on disk too.
         if found.is_none() && root_dir.is_relative() {
-            let absolute = std::path::absolute(if root_dir.as_os_str().is_empty() { Path::new(".") } else { &root_dir });
+            let absolute =
+                std::path::absolute(if root_dir.as_os_str().is_empty() { Path::new(".") } else { &root_dir });
             for dir in absolute.iter().flat_map(|a| a.ancestors()) {
                 if self.loader.load(&dir.join("project.godot")).is_ok() {
                     found = Some(normalize(dir));
@@ -1154,7 +1137,8 @@ impl Pp<'_> {
     fn outside_of(&mut self, resolved: &Path) -> Option<PathBuf> {
         let root = self.project_root();
         let absolute = |p: &Path| std::path::absolute(p).map(|a| normalize(&a)).unwrap_or_else(|_| normalize(p));
-        let (root_abs, path_abs) = (absolute(if root.as_os_str().is_empty() { Path::new(".") } else { &root }), absolute(resolved));
+        let (root_abs, path_abs) =
+            (absolute(if root.as_os_str().is_empty() { Path::new(".") } else { &root }), absolute(resolved));
         (!path_abs.starts_with(&root_abs)).then_some(root_abs)
     }
 
