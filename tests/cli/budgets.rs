@@ -64,3 +64,49 @@ fn a_pipeline_build_past_the_driver_budget_ends_the_command() {
     assert!(took < std::time::Duration::from_secs(120), "ended at the budget, not at the driver's pace: {took:?}");
     assert!(!out.exists(), "nothing is written");
 }
+
+/// A PNG of a few dozen bytes whose header claims `width`×`height` grey pixels: what a decoder
+/// would allocate 4 GiB for before finding the data missing.
+fn png_claiming(width: u32, height: u32) -> Vec<u8> {
+    let chunk = |kind: &[u8], data: &[u8]| {
+        let mut c = (data.len() as u32).to_be_bytes().to_vec();
+        c.extend_from_slice(kind);
+        c.extend_from_slice(data);
+        let mut crc = crc32fast::Hasher::new();
+        crc.update(kind);
+        crc.update(data);
+        c.extend_from_slice(&crc.finalize().to_be_bytes());
+        c
+    };
+    let mut ihdr = width.to_be_bytes().to_vec();
+    ihdr.extend_from_slice(&height.to_be_bytes());
+    ihdr.extend_from_slice(&[8, 0, 0, 0, 0]); // 8-bit grey, deflate, no filter, no interlace
+    let mut png = b"\x89PNG\r\n\x1a\n".to_vec();
+    png.extend(chunk(b"IHDR", &ihdr));
+    png.extend(chunk(b"IDAT", &[0x78, 0x01, 0x01, 0x00, 0x00, 0xff, 0xff, 0x00, 0x00, 0x00, 0x01]));
+    png.extend(chunk(b"IEND", &[]));
+    png
+}
+
+/// An occluder mask is sampled at the render's size: one whose header claims more than the
+/// largest render (here 65535², 4 GiB decoded) is refused from its header, before decoding.
+#[test]
+fn an_occluder_claiming_a_huge_image_is_refused_from_its_header() {
+    let dir = scratch("budgets", "mask");
+    let mask = dir.join("huge.png");
+    std::fs::write(&mask, png_claiming(65535, 65535)).expect("write");
+    let out = dir.join("sky.exr");
+    let o = gdsky(&[
+        "render",
+        "--size",
+        "16x8",
+        "-o",
+        out.to_str().expect("utf-8"),
+        "--occluder",
+        mask.to_str().expect("utf-8"),
+    ]);
+    let said = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{said}");
+    assert!(said.contains("65535x65535") && said.contains("refused before decoding"), "{said}");
+    assert!(!out.exists());
+}

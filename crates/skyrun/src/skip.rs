@@ -105,6 +105,8 @@ pub enum MaskError {
     Read(PathBuf, std::io::Error),
     /// The file is not a PNG that decodes.
     Decode(PathBuf, String),
+    /// The PNG's header claims more pixels a side than the largest render (width, height).
+    TooLarge(PathBuf, u32, u32),
 }
 
 impl MaskError {
@@ -119,6 +121,12 @@ impl fmt::Display for MaskError {
         match self {
             MaskError::Read(p, e) => write!(f, "cannot read the occluder mask {}: {e}", p.display()),
             MaskError::Decode(p, e) => write!(f, "the occluder mask {} is not a readable PNG: {e}", p.display()),
+            MaskError::TooLarge(p, w, h) => write!(
+                f,
+                "the occluder mask {} is {w}x{h}: at most {} pixels a side (the largest render), refused before decoding",
+                p.display(),
+                crate::MAX_RENDER_SIDE
+            ),
         }
     }
 }
@@ -158,6 +166,13 @@ impl Occluder {
         );
         decoder.set_transformations(png::Transformations::normalize_to_color8());
         let mut reader = decoder.read_info().map_err(|e| decode(&e))?;
+        // From the header, before the pixels are allocated: a mask is sampled at the render's
+        // size, so one larger than the largest render is refused (a 510 KB PNG can claim
+        // 65535², 4 GiB decoded).
+        let (mw, mh) = (reader.info().width, reader.info().height);
+        if mw > crate::MAX_RENDER_SIDE || mh > crate::MAX_RENDER_SIDE {
+            return Err(MaskError::TooLarge(path.into(), mw, mh));
+        }
         let size = reader.output_buffer_size().ok_or_else(|| decode(&"the image is too large"))?;
         let mut buf = vec![0u8; size];
         let info = reader.next_frame(&mut buf).map_err(|e| decode(&e))?;
