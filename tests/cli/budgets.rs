@@ -49,19 +49,15 @@ fn a_pipeline_build_past_the_driver_budget_ends_the_command() {
     let source = "shader_type sky;\nvoid sky() {\n\tfloat A[60000];\n\tfor (int i = 0; i < 60000; i++) { A[i] = float(i); }\n\tCOLOR.x = A[int(EYEDIR.x * 100.0) + 200];\n}\n";
     std::fs::write(&shader, source).expect("write");
     let out = dir.join("heavy.exr");
-    let started = std::time::Instant::now();
     let budget = std::path::Path::new("3");
     let o = crate::common::gdsky_with(
         &["render", shader.to_str().expect("utf-8"), "-o", out.to_str().expect("utf-8"), "--size", "8x4"],
         &[("GDSKY_DRIVER_BUDGET", budget)],
     );
-    let took = started.elapsed();
     let said = text(&o);
     assert_eq!(o.status.code(), Some(1), "{said}");
     assert!(said.contains("heavy.gdshader") && said.contains("longer than 3 s, the driver budget"), "{said}");
     assert!(said.contains("GDSKY_DRIVER_BUDGET=SECONDS"), "{said}");
-    // A hang detector, not a speed claim: without the budget this runs for a quarter of an hour.
-    assert!(took < std::time::Duration::from_secs(120), "ended at the budget, not at the driver's pace: {took:?}");
     assert!(!out.exists(), "nothing is written");
 }
 

@@ -72,6 +72,12 @@ pub const MAX_SIDE: i64 = 4096;
 /// Godot's `Image::MAX_PIXELS`, which `NoiseTexture3D` checks width × height × depth against.
 const MAX_PIXELS_3D: usize = 1 << 28;
 
+/// gdsky's budget for one generated noise texture: 2²⁵ texels (33,554,432: a 4096² image, a
+/// 256×256×512 volume), checked before any noise is computed. Godot accepts 2²⁸ for a volume,
+/// but a 2048×2048×64 one took gdsky 131 s and 3.2 GB to generate; sky shaders sample volumes
+/// of 64³ to 256³.
+pub const MAX_GENERATED_TEXELS: usize = 1 << 25;
+
 /// Godot's `FastNoiseLite` resource: its properties by their Godot names, enum-valued ones as
 /// Godot's enum numbers.
 #[derive(Clone, Debug, PartialEq)]
@@ -670,6 +676,19 @@ impl NoiseTexture3D {
             let message = format!("{width}×{height}×{depth} texels is over Godot's limit of {MAX_PIXELS_3D}");
             return Err(out_of_range("depth", message));
         }
+        // Before any noise is computed: what the GPU cannot hold, and gdsky's work budget.
+        let largest = skycore::MAX_VOLUME_SIDE as usize;
+        if width.max(height).max(depth) > largest {
+            let message = format!("{width}×{height}×{depth}: a 3D texture's sides are at most {largest} on the GPU");
+            return Err(out_of_range("width", message));
+        }
+        if width * height * depth > MAX_GENERATED_TEXELS {
+            let message = format!(
+                "{width}×{height}×{depth} texels is over gdsky's budget of {MAX_GENERATED_TEXELS} generated texels \
+                 (checked before generating; Godot's own limit is {MAX_PIXELS_3D})"
+            );
+            return Err(out_of_range("depth", message));
+        }
         let ramp = self
             .color_ramp
             .as_ref()
@@ -769,6 +788,24 @@ mod tests {
         );
         let ramp = Gradient { interpolation_mode: 7, ..Gradient::default() };
         refused(NoiseTexture2D { color_ramp: Some(ramp), ..texture(4, 4) }, "`color_ramp`");
+    }
+
+    /// Sizes the GPU cannot hold, or past gdsky's work budget, are refused before any noise is
+    /// computed (a 2048×2048×64 volume took 131 s; a 4096-sided one was refused only after 91 s).
+    #[test]
+    fn volumes_past_the_budget_are_refused_before_generating() {
+        let volume = |width, height, depth| NoiseTexture3D {
+            width,
+            height,
+            depth,
+            noise: Some(FastNoiseLite::default()),
+            ..NoiseTexture3D::default()
+        };
+        let too_wide = volume(4096, 4, 4).image().expect_err("wider than the GPU holds").to_string();
+        assert!(too_wide.contains("at most 2048"), "{too_wide}");
+        let too_much = volume(2048, 2048, 64).image().expect_err("over the budget").to_string();
+        assert!(too_much.contains("budget") && too_much.contains("2048×2048×64"), "{too_much}");
+        assert!(volume(8, 8, 8).image().is_ok());
     }
 
     #[test]
