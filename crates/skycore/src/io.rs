@@ -250,6 +250,34 @@ fn temporary_path(target: &Path, purpose: &str) -> PathBuf {
     parent_dir(target).join(name)
 }
 
+/// Removes the temporary files of `target` ([`temporary_path`]'s names) that a gdsky process
+/// which no longer runs left behind (killed between writing and renaming). Only on Linux, where
+/// `/proc` says which processes run; elsewhere they stay. Best effort: a file that cannot be
+/// removed is left.
+fn remove_stale_temporaries(target: &Path) {
+    if !cfg!(target_os = "linux") || !Path::new("/proc/self").exists() {
+        return;
+    }
+    let Some(name) = target.file_name() else { return };
+    let mut prefix = OsString::from(".");
+    prefix.push(name);
+    prefix.push(".");
+    let Some(prefix) = prefix.to_str().map(str::to_owned) else { return };
+    let Ok(entries) = fs::read_dir(parent_dir(target)) else { return };
+    for entry in entries.flatten() {
+        let file_name = entry.file_name();
+        let Some(rest) = file_name.to_str().and_then(|n| n.strip_prefix(&prefix)) else { continue };
+        // `{pid}-{counter}.{tmp|probe}`
+        let Some((ids, purpose)) = rest.rsplit_once('.') else { continue };
+        let Some((pid, counter)) = ids.split_once('-') else { continue };
+        let digits = |t: &str| !t.is_empty() && t.bytes().all(|b| b.is_ascii_digit());
+        let ours = matches!(purpose, "tmp" | "probe") && digits(pid) && digits(counter);
+        if ours && !Path::new("/proc").join(pid).exists() && entry.file_type().is_ok_and(|t| t.is_file()) {
+            let _ = fs::remove_file(entry.path());
+        }
+    }
+}
+
 /// Creates (exclusively: never through a link, never over a stale file) the temporary file.
 fn create_temporary(tmp: &Path) -> io::Result<fs::File> {
     fs::OpenOptions::new().write(true).create_new(true).open(tmp).map_err(|err| {
@@ -390,6 +418,7 @@ struct Staged<'a> {
 /// Writes `bytes` to a temporary file beside where `path` lands, flushed to disk.
 fn stage<'a>(path: &'a Path, bytes: &[u8]) -> io::Result<Staged<'a>> {
     let target = resolve_output(path)?;
+    remove_stale_temporaries(&target);
     let tmp = temporary_path(&target, "tmp");
     let mut file = create_temporary(&tmp)?;
     let staged = Staged { path, target, tmp, committed: false };
@@ -457,6 +486,30 @@ mod tests {
     fn mkfifo(path: &Path) {
         let status = std::process::Command::new("mkfifo").arg(path).status().unwrap();
         assert!(status.success());
+    }
+
+    /// A temporary file left by a killed writer (its process gone) is removed by the next write
+    /// of the same target; one of a running writer, and other files, are kept.
+    #[test]
+    fn stale_temporaries_of_dead_writers_are_cleaned_up() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("sky.exr");
+        // PID 4194304 is above Linux's largest (2^22): never a running process.
+        let stale = dir.path().join(".sky.exr.4194304-0.tmp");
+        let running = dir.path().join(format!(".sky.exr.{}-99.tmp", std::process::id()));
+        let other = dir.path().join(".other.exr.4194304-0.tmp");
+        for f in [&stale, &running, &other] {
+            fs::write(f, b"partial").unwrap();
+        }
+        write_atomically(&target, b"new").unwrap();
+        assert_eq!(
+            entries(dir.path()),
+            vec![
+                ".other.exr.4194304-0.tmp".to_string(),
+                running.file_name().unwrap().to_string_lossy().into_owned(),
+                "sky.exr".into()
+            ]
+        );
     }
 
     #[test]
