@@ -213,6 +213,15 @@ pub fn too_deep_for_wgsl(module: &naga::Module) -> Option<naga::Span> {
     bodies.into_iter().find_map(|body| block(body, 1))
 }
 
+/// Runs one of naga's readers on what gdsky made: a panic inside it (the SPIR-V front end's
+/// 16-bit word count once wrapped on a 65,539-word instruction) becomes an error that says what
+/// was being done, so the command reports it (E604) and writes nothing, instead of exit 101.
+/// The panic hook has already printed naga's own message on stderr.
+fn guarded<T>(what: &str, work: impl FnOnce() -> T) -> Result<T, String> {
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(work))
+        .map_err(|_| format!("naga panicked {what}: a bug in naga or in gdsky's output; nothing was written"))
+}
+
 /// Re-reads emitted WGSL with naga's front end and validator; an error names the function of
 /// `module` whose text holds the offending line.
 pub fn reread_wgsl(module: &naga::Module, text: &str) -> Result<(), EmitError> {
@@ -221,17 +230,24 @@ pub fn reread_wgsl(module: &naga::Module, text: &str) -> Result<(), EmitError> {
         let span = function.as_deref().and_then(|name| function_span(module, name));
         EmitError { format: "WGSL", message, reread: true, span, function, limitation: false }
     };
-    let reread = naga::front::wgsl::parse_str(text).map_err(|e| {
-        let offset = e.location(text).map(|l| l.offset as usize);
-        fail(format!("the emitted WGSL does not re-read: {}", e.emit_to_string_with_path(text, "emitted.wgsl")), offset)
-    })?;
-    validator().validate(&reread).map_err(|e| {
-        let offset = e.spans().next().and_then(|(s, _)| s.to_range()).map(|r| r.start);
-        fail(
-            format!("the re-read WGSL does not validate: {}", e.emit_to_string_with_path(text, "emitted.wgsl")),
-            offset,
-        )
-    })?;
+    let reread = guarded("re-reading the emitted WGSL", || naga::front::wgsl::parse_str(text))
+        .map_err(|m| fail(m, None))?
+        .map_err(|e| {
+            let offset = e.location(text).map(|l| l.offset as usize);
+            fail(
+                format!("the emitted WGSL does not re-read: {}", e.emit_to_string_with_path(text, "emitted.wgsl")),
+                offset,
+            )
+        })?;
+    guarded("validating the re-read WGSL", || validator().validate(&reread)).map_err(|m| fail(m, None))?.map_err(
+        |e| {
+            let offset = e.spans().next().and_then(|(s, _)| s.to_range()).map(|r| r.start);
+            fail(
+                format!("the re-read WGSL does not validate: {}", e.emit_to_string_with_path(text, "emitted.wgsl")),
+                offset,
+            )
+        },
+    )?;
     Ok(())
 }
 
@@ -282,12 +298,15 @@ pub fn to_spirv_with(lowered: &Lowered, spirv: &SpirvOptions) -> Result<Vec<u32>
             .map_err(|(message, limitation)| EmitError { limitation, ..fail(message, false) })?
     };
     let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
-    let mut reread = naga::front::spv::parse_u8_slice(&bytes, &naga::front::spv::Options::default())
-        .map_err(|e| fail(format!("the emitted SPIR-V does not re-read with naga's SPIR-V front end: {e}"), true))?;
+    let mut reread = guarded("re-reading the emitted SPIR-V", || {
+        naga::front::spv::parse_u8_slice(&bytes, &naga::front::spv::Options::default())
+    })
+    .map_err(|m| fail(m, true))?
+    .map_err(|e| fail(format!("the emitted SPIR-V does not re-read with naga's SPIR-V front end: {e}"), true))?;
     complete_spirv_reread(&mut reread);
     // An f64 module re-reads with f64 types and needs FLOAT64.
-    validator_for(&reread)
-        .validate(&reread)
+    guarded("validating the re-read SPIR-V", || validator_for(&reread).validate(&reread))
+        .map_err(|m| fail(m, true))?
         .map_err(|e| fail(format!("the re-read SPIR-V does not validate: {}", error_chain(e.as_inner())), true))?;
     // Every override reads back as the specialization constant of its id, with its default.
     for (_, o) in lowered.module.overrides.iter() {
@@ -650,4 +669,16 @@ fn function_span(module: &naga::Module, name: &str) -> Option<naga::Span> {
             || module.entry_points.iter().find(|e| matches(&e.function.name)).map(|_| naga::Span::UNDEFINED),
         )?;
     span.is_defined().then_some(span)
+}
+
+#[cfg(test)]
+mod guard_tests {
+    /// A reader that panics is an error saying what was being done, not an unwinding panic.
+    #[test]
+    fn a_panicking_reader_becomes_an_error() {
+        let outcome: Result<(), String> = super::guarded("re-reading a test", || panic!("inside the reader"));
+        let message = outcome.expect_err("the panic is caught");
+        assert!(message.contains("naga panicked re-reading a test") && message.contains("nothing was written"));
+        assert_eq!(super::guarded("re-reading a test", || 7), Ok(7));
+    }
 }
