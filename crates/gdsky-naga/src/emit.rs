@@ -239,15 +239,15 @@ pub fn reread_wgsl(module: &naga::Module, text: &str) -> Result<(), EmitError> {
                 offset,
             )
         })?;
-    guarded("validating the re-read WGSL", || validator().validate(&reread)).map_err(|m| fail(m, None))?.map_err(
-        |e| {
+    guarded("validating the re-read WGSL", || validator().validate(&reread).map_err(Box::new))
+        .map_err(|m| fail(m, None))?
+        .map_err(|e| {
             let offset = e.spans().next().and_then(|(s, _)| s.to_range()).map(|r| r.start);
             fail(
                 format!("the re-read WGSL does not validate: {}", e.emit_to_string_with_path(text, "emitted.wgsl")),
                 offset,
             )
-        },
-    )?;
+        })?;
     Ok(())
 }
 
@@ -305,7 +305,7 @@ pub fn to_spirv_with(lowered: &Lowered, spirv: &SpirvOptions) -> Result<Vec<u32>
     .map_err(|e| fail(format!("the emitted SPIR-V does not re-read with naga's SPIR-V front end: {e}"), true))?;
     complete_spirv_reread(&mut reread);
     // An f64 module re-reads with f64 types and needs FLOAT64.
-    guarded("validating the re-read SPIR-V", || validator_for(&reread).validate(&reread))
+    guarded("validating the re-read SPIR-V", || validator_for(&reread).validate(&reread).map_err(Box::new))
         .map_err(|m| fail(m, true))?
         .map_err(|e| fail(format!("the re-read SPIR-V does not validate: {}", error_chain(e.as_inner())), true))?;
     // Every override reads back as the specialization constant of its id, with its default.
