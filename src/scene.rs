@@ -559,8 +559,16 @@ impl SceneFile {
     pub fn load(path: &Path) -> Result<SceneFile, SceneError> {
         let bytes = skycore::io::read_limited(path, MAX_SCENE_BYTES)
             .map_err(|e| SceneError::Read(format!("cannot read {}: {e}", path.display())))?;
-        let text =
-            String::from_utf8(bytes).map_err(|_| SceneError::Invalid(format!("{}: not UTF-8 text", path.display())))?;
+        let text = String::from_utf8(bytes).map_err(|e| {
+            // Located like every other scene-file error: the line and column of the first bad byte.
+            let good = &e.as_bytes()[..e.utf8_error().valid_up_to()];
+            let line = good.iter().filter(|&&b| b == b'\n').count() + 1;
+            let column = good.iter().rev().take_while(|&&b| b != b'\n').count() + 1;
+            SceneError::Invalid(format!(
+                "error: {}:{line}:{column}: not UTF-8 text (a scene file is TOML, UTF-8)",
+                path.display()
+            ))
+        })?;
         Self::parse(path, text)
     }
 

@@ -43,13 +43,17 @@ pub fn run(args: &BakeLutArgs) -> ExitCode {
         return code;
     }
     let mut params = skyref::FreemanParams::default();
+    let mut sets = Vec::with_capacity(args.set.len());
     for item in &args.set {
         let Some((name, value)) = item.split_once('=') else {
             return usage(format!("--set `{item}`: expected NAME=VALUE"));
         };
-        if let Err(e) = params.set(name.trim(), value) {
-            return usage(format!("--set: {e}"));
-        }
+        sets.push((name.trim().to_string(), value.trim().to_string()));
+    }
+    // Every value checked as `render --set` checks it (finite, in its type's range), whether
+    // the table reads that uniform or not.
+    if let Err(e) = gdsky::engine::set_freeman(&mut params, &sets) {
+        return usage(e);
     }
     let finite = [
         params.rayleigh_scale_height,

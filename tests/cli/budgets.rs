@@ -106,3 +106,21 @@ fn an_occluder_claiming_a_huge_image_is_refused_from_its_header() {
     assert!(said.contains("65535x65535") && said.contains("refused before decoding"), "{said}");
     assert!(!out.exists());
 }
+
+/// The minor defects of issue #22: each is wrong input with a clear, located message.
+#[test]
+fn small_inputs_get_clear_messages() {
+    let dir = scratch("budgets", "minor");
+    // A scene file that is not UTF-8: located at its first bad byte.
+    let toml = dir.join("bad.toml");
+    std::fs::write(&toml, b"size = [8, 4]\nshader = \"a\xff.gdshader\"\n").expect("write");
+    let exr = dir.join("x.exr");
+    let o = gdsky(&["render", toml.to_str().expect("utf-8"), "-o", exr.to_str().expect("utf-8")]);
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    assert!(text(&o).contains("error: ") && text(&o).contains("bad.toml:2:12: not UTF-8"), "{}", text(&o));
+    // bake-lut checks every value, whether the table reads the uniform or not.
+    let lut = dir.join("lut.exr");
+    let o = gdsky(&["bake-lut", "--set", "mie_g_forward=nan", "-o", lut.to_str().expect("utf-8")]);
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    assert!(text(&o).contains("not a finite number") && !lut.exists(), "{}", text(&o));
+}

@@ -671,10 +671,18 @@ fn image_source(path: PathBuf, file: FileId, span: Span) -> Result<TextureSource
         return Ok(TextureSource::Image(path));
     }
     Err(Failure::Invalid(
-        error(codes::BAD_TEXTURE, file, span, format!("{}: gdsky cannot read .{ext} images", path.display()))
-            .with_note(
-                "textures gdsky reads: PNG (.png) and OpenEXR (.exr); convert the image, or give --texture NAME=PATH",
-            ),
+        error(
+            codes::BAD_TEXTURE,
+            file,
+            span,
+            match ext.as_str() {
+                "" => format!("{}: an image file needs an extension (.png or .exr) to be read", path.display()),
+                ext => format!("{}: gdsky cannot read .{ext} images", path.display()),
+            },
+        )
+        .with_note(
+            "textures gdsky reads: PNG (.png) and OpenEXR (.exr); convert the image, or give --texture NAME=PATH",
+        ),
     ))
 }
 
