@@ -32,7 +32,7 @@ libfuzzer_sys::fuzz_target!(|data: &[u8]| {
     if output.shader.is_none() {
         return;
     }
-    match gdsky_naga::lower(&output) {
+    match gdsky_naga::lower(&output, &gdsky_naga::LowerOptions::default()) {
         Err(diagnostics) => {
             assert!(diagnostics.iter().all(|d| d.code != gdsky_naga::INVALID_MODULE), "{:?}", diagnostics);
         }
