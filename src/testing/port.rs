@@ -173,19 +173,23 @@ impl Port {
                 return Err(format!("{shown}: {} bytes is not a whole number of SPIR-V words", bytes.len()));
             }
             let options = naga::front::spv::Options::default();
-            let module = naga::front::spv::parse_u8_slice(&bytes, &options)
+            let module = guarded(&shown, || naga::front::spv::parse_u8_slice(&bytes, &options))?
                 .map_err(|e| format!("{shown}: not SPIR-V naga can read: {e}"))?;
             let words = bytes.chunks_exact(4).map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]])).collect();
             (module, Some(words), None)
         } else {
             let text = String::from_utf8(bytes).map_err(|_| format!("{shown}: not UTF-8 WGSL"))?;
-            let module = naga::front::wgsl::parse_str(&text)
+            let module = guarded(&shown, || naga::front::wgsl::parse_str(&text))?
                 .map_err(|e| e.emit_to_string_with_path(&text, &shown.to_string()))?;
             (module, None, Some(text))
         };
-        let info = gdsky_naga::validator()
-            .validate(&module)
-            .map_err(|e| format!("{shown}: naga does not validate the port: {}", e.emit_to_string("")))?;
+        let text = source.as_deref().unwrap_or("");
+        let info = guarded(&shown, || gdsky_naga::validator().validate(&module).map_err(Box::new))?.map_err(|e| {
+            format!(
+                "{shown}: naga does not validate the port: {}",
+                e.emit_to_string_with_path(text, &shown.to_string())
+            )
+        })?;
         // The WGSL source as written; for SPIR-V, naga's WGSL of it (only its resources are read).
         let wgsl = match source {
             Some(text) => text,
@@ -309,6 +313,13 @@ impl Port {
         }
         Ok(block)
     }
+}
+
+/// Runs one of naga's readers on the user's port: a panic inside it is an error naming the file,
+/// not a test binary aborting in naga.
+fn guarded<T>(shown: &impl std::fmt::Display, work: impl FnOnce() -> T) -> Result<T, String> {
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(work))
+        .map_err(|_| format!("{shown}: naga panicked reading the port (a bug in naga; the port may be unusual)"))
 }
 
 /// The members and the size of the uniform struct at (group, binding).
