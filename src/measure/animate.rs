@@ -207,6 +207,15 @@ pub fn animate(options: &AnimateOptions, progress: &dyn Progress) -> Result<Anim
         .chain(["animate.csv".to_string()])
         .collect();
     engine::check_output_dir(&args.out_dir, true, &names.iter().map(String::as_str).collect::<Vec<_>>())?;
+    // The work up front: a long sequence is a choice the user should see it making.
+    let pixels = u64::from(anim.frames) * views.len() as u64 * u64::from(width) * u64::from(height);
+    note!(
+        progress,
+        "animate: {} frame(s) × {} view(s) of {width}×{height} = {} pixels to render at most (less where views are reused)",
+        anim.frames,
+        views.len(),
+        pixels
+    );
 
     let cli_sets = args.flag_sets.clone();
     let keyframed: Vec<String> = anim.uniforms.iter().map(|t| t.name.clone()).collect();
@@ -353,6 +362,9 @@ pub fn animate(options: &AnimateOptions, progress: &dyn Progress) -> Result<Anim
                 .map_err(|e| Error::environment(e.to_string()))?;
         }
         csv += &format!("{k},{},{},{:.3},{}\n", !todo.is_empty(), todo.len(), spent.as_secs_f64() * 1e3, frame.summary);
+        if k == 0 {
+            check_disk(&args.out_dir, &exr, &png, anim.frames)?;
+        }
     }
     let wall = started.elapsed();
     let csv_path = args.out_dir.join("animate.csv");
@@ -412,4 +424,49 @@ pub fn animate(options: &AnimateOptions, progress: &dyn Progress) -> Result<Anim
     }
     say!(out, "wrote {} frames (EXR, PNG) and {} in {}", n, csv_path.display(), args.out_dir.display());
     Ok(AnimateReport { text: out, rendered, reused, csv: csv_path })
+}
+
+/// After the first frame: its files' size × the frame count against the space left on the
+/// output's file system, so a sequence that cannot fit stops now rather than on a full disk
+/// hours later. Frames compress differently, so this is an estimate; it refuses only when the
+/// estimate is over the free space.
+fn check_disk(
+    out_dir: &std::path::Path,
+    exr: &std::path::Path,
+    png: &std::path::Path,
+    frames: u32,
+) -> Result<(), Error> {
+    let size = |p: &std::path::Path| std::fs::metadata(p).map(|m| m.len()).unwrap_or(0);
+    let per_frame = size(exr) + size(png);
+    let rest = per_frame.saturating_mul(u64::from(frames.saturating_sub(1)));
+    let Some(free) = skycore::io::available_space(out_dir) else { return Ok(()) };
+    if rest > free {
+        let mib = |b: u64| b as f64 / f64::from(1 << 20);
+        return Err(Error::environment(format!(
+            "{}: the first frame took {:.1} MiB (EXR and PNG), so the other {} frames need about {:.0} MiB, but only \
+             {:.0} MiB are free there; free space, lower --size, or render fewer frames",
+            out_dir.display(),
+            mib(per_frame),
+            frames - 1,
+            mib(rest),
+            mib(free)
+        )));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn a_sequence_that_cannot_fit_stops_after_its_first_frame() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let (exr, png) = (dir.path().join("frame_0000.exr"), dir.path().join("frame_0000.png"));
+        // A sparse first frame of 1 TiB: no disk holds a million of them.
+        std::fs::File::create(&exr).and_then(|f| f.set_len(1 << 40)).expect("sparse file");
+        std::fs::write(&png, b"png").expect("writes");
+        let err = super::check_disk(dir.path(), &exr, &png, 1_000_000).expect_err("refused").to_string();
+        assert!(err.contains("the other 999999 frames need about") && err.contains("MiB are free"), "{err}");
+        // One frame needs nothing more.
+        super::check_disk(dir.path(), &exr, &png, 1).expect("fits");
+    }
 }

@@ -24,6 +24,38 @@ fn an_array_longer_than_one_spirv_instruction_holds_is_refused_at_its_size() {
     assert!(!out.exists(), "nothing is written");
 }
 
+/// 5,000 one-line functions, each called once (342 KB): naga's SPIR-V reader would build an
+/// expression for every constant in every function to re-read the module (16 million at 4,000
+/// functions, 880 MB; 2.6 GB at 5,000 before the budget). Refused by the budget instead, with
+/// nothing written; 2,000 functions (4 million) still convert.
+#[test]
+fn a_module_too_large_for_the_spirv_reread_is_refused_by_its_budget() {
+    let many = |n: usize| {
+        let mut source = String::from("shader_type sky;\n");
+        for i in 0..n {
+            source += &format!("float f{i}(float x) {{ return x * {i}.0 + sin(x); }}\n");
+        }
+        source += "void sky() {\n    float a = 0.0;\n";
+        for i in 0..n {
+            source += &format!("    a += f{i}(a);\n");
+        }
+        source + "    COLOR = vec3(a);\n}\n"
+    };
+    let (o, out) = convert("reread_budget", &many(5000));
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    let said = text(&o);
+    assert!(
+        said.contains("cannot write this shader as SPIR-V")
+            && said.contains("5005 functions")
+            && said.contains("budget"),
+        "{said}"
+    );
+    assert!(!out.exists(), "nothing is written");
+    let (o, out) = convert("reread_within_budget", &many(2000));
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    assert!(out.join("reread_within_budget.spv").is_file());
+}
+
 #[test]
 fn a_uniform_block_larger_than_a_binding_is_refused_at_its_largest_uniform() {
     let (o, out) = convert(

@@ -42,9 +42,9 @@ pub struct EmitError {
     span: Option<naga::Span>,
     /// The function's name in the emitted text.
     function: Option<String>,
-    /// A known limit of what gdsky can write (an override as a specialization constant), not a
-    /// bug.
-    limitation: bool,
+    /// A known limit of what gdsky can write, not a bug: what to do about it (an override that
+    /// is no specialization constant, a module too large to re-read).
+    limitation: Option<&'static str>,
 }
 
 impl std::fmt::Display for EmitError {
@@ -59,14 +59,15 @@ impl EmitError {
     /// The failure as a diagnostic at the user's function (code [`BACKEND`] or [`REREAD`]).
     pub fn diagnostic(&self, front: &FrontendOutput) -> Diagnostic {
         let code = if self.reread { REREAD } else { BACKEND };
-        let mut d = Diagnostic::error(code, format!("gdsky emitted {} that does not hold up", self.format))
-            .with_note(self.message.clone())
-            .with_note(if self.limitation {
-                "a limit of gdsky's SPIR-V output, not a bug; nothing was written (the override works in WGSL; \
-                 without `--override` of this uniform the SPIR-V is written)"
-            } else {
-                "this is a bug in gdsky's translation, not in the shader; nothing was written; please report it"
-            });
+        let title = if self.limitation.is_some() {
+            format!("gdsky cannot write this shader as {}", self.format)
+        } else {
+            format!("gdsky emitted {} that does not hold up", self.format)
+        };
+        let mut d =
+            Diagnostic::error(code, title).with_note(self.message.clone()).with_note(self.limitation.unwrap_or(
+                "this is a bug in gdsky's translation, not in the shader; nothing was written; please report it",
+            ));
         match (self.span.and_then(|s| s.to_range()), &self.function) {
             (Some(range), Some(name)) => {
                 let (file, range) = front.locate(ast::Span::new(range.start, range.end));
@@ -97,7 +98,7 @@ pub fn to_wgsl(lowered: &Lowered) -> Result<String, EmitError> {
             reread: false,
             span: None,
             function: None,
-            limitation: false,
+            limitation: None,
         },
     )?;
     reread_wgsl(&lowered.module, &text)?;
@@ -228,7 +229,7 @@ pub fn reread_wgsl(module: &naga::Module, text: &str) -> Result<(), EmitError> {
     let fail = |message: String, offset: Option<usize>| {
         let function = offset.and_then(|o| enclosing_wgsl_function(text, o));
         let span = function.as_deref().and_then(|name| function_span(module, name));
-        EmitError { format: "WGSL", message, reread: true, span, function, limitation: false }
+        EmitError { format: "WGSL", message, reread: true, span, function, limitation: None }
     };
     let reread = guarded("re-reading the emitted WGSL", || naga::front::wgsl::parse_str(text))
         .map_err(|m| fail(m, None))?
@@ -283,7 +284,7 @@ pub fn to_spirv_with(lowered: &Lowered, spirv: &SpirvOptions) -> Result<Vec<u32>
         reread,
         span: None,
         function: None,
-        limitation: false,
+        limitation: None,
     };
     use naga::back::spv::WriterFlags;
     let mut flags = WriterFlags::ADJUST_COORDINATE_SPACE | WriterFlags::LABEL_VARYINGS | WriterFlags::CLAMP_FRAG_DEPTH;
@@ -294,9 +295,33 @@ pub fn to_spirv_with(lowered: &Lowered, spirv: &SpirvOptions) -> Result<Vec<u32>
         naga::back::spv::write_vec(&lowered.module, &lowered.info, &options, None)
             .map_err(|e| fail(format!("naga's SPIR-V writer failed: {e}"), false))?
     } else {
-        spec_constants(&lowered.module, &options)
-            .map_err(|(message, limitation)| EmitError { limitation, ..fail(message, false) })?
+        spec_constants(&lowered.module, &options).map_err(|(message, limitation)| EmitError {
+            limitation: limitation.then_some(
+                "a limit of gdsky's SPIR-V output, not a bug; nothing was written (the override works in WGSL; \
+                     without `--override` of this uniform the SPIR-V is written)",
+            ),
+            ..fail(message, false)
+        })?
     };
+    let (functions, module_values) = spirv_reread_size(&words);
+    let cost = functions.saturating_mul(module_values);
+    if cost > MAX_SPIRV_REREAD_EXPRESSIONS {
+        return Err(EmitError {
+            limitation: Some(
+                "a budget of gdsky's, not a bug: nothing was written; fewer functions (inline small helpers) or \
+                 fewer distinct literal values bring it under",
+            ),
+            ..fail(
+                format!(
+                    "the SPIR-V has {functions} functions and {module_values} module-level constants and variables; \
+                     naga's SPIR-V reader, which re-reads every module gdsky writes, gives each function an expression \
+                     for each of them: {cost} expressions, over the budget of {MAX_SPIRV_REREAD_EXPRESSIONS} (about \
+                     50 bytes each)"
+                ),
+                false,
+            )
+        });
+    }
     let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
     let mut reread = guarded("re-reading the emitted SPIR-V", || {
         naga::front::spv::parse_u8_slice(&bytes, &naga::front::spv::Options::default())
@@ -304,6 +329,10 @@ pub fn to_spirv_with(lowered: &Lowered, spirv: &SpirvOptions) -> Result<Vec<u32>
     .map_err(|m| fail(m, true))?
     .map_err(|e| fail(format!("the emitted SPIR-V does not re-read with naga's SPIR-V front end: {e}"), true))?;
     complete_spirv_reread(&mut reread);
+    // naga's SPIR-V reader gives every function an expression for every module-level constant;
+    // compaction drops the unused ones, so validating the re-read costs memory in proportion to
+    // the module rather than to functions × constants (5,000 small functions: 2.6 GB before).
+    naga::compact::compact(&mut reread, naga::compact::KeepUnused::Yes);
     // An f64 module re-reads with f64 types and needs FLOAT64.
     guarded("validating the re-read SPIR-V", || validator_for(&reread).validate(&reread).map_err(Box::new))
         .map_err(|m| fail(m, true))?
@@ -327,7 +356,36 @@ pub fn to_spirv_with(lowered: &Lowered, spirv: &SpirvOptions) -> Result<Vec<u32>
     Ok(words)
 }
 
-/// SPIR-V opcodes [`spec_constants`] reads or writes.
+/// Most expressions naga's SPIR-V reader may build to re-read a module: functions × module-level
+/// constants and variables, which it puts in every function's expression arena before reading its
+/// body. Measured at about 50 bytes each at the peak of a `convert` (after compaction of the
+/// re-read): 4.1 million took 237 MB, 16.3 million 880 MB; the shipped skies need at most a few
+/// thousand. 8 million bounds the re-read near 450 MB.
+pub const MAX_SPIRV_REREAD_EXPRESSIONS: u64 = 8 << 20;
+
+/// (functions, module-level constants and global variables) of a SPIR-V module, counted from its
+/// instructions: what [`MAX_SPIRV_REREAD_EXPRESSIONS`] bounds.
+fn spirv_reread_size(words: &[u32]) -> (u64, u64) {
+    let (mut functions, mut values, mut in_function, mut at) = (0u64, 0u64, false, 5usize);
+    while let Some(&word) = words.get(at) {
+        let (count, opcode) = ((word >> 16) as usize, word & 0xffff);
+        match opcode {
+            op::FUNCTION => {
+                functions += 1;
+                in_function = true;
+            }
+            op::FUNCTION_END => in_function = false,
+            // OpConstantTrue … OpSpecConstantOp, and OpVariable outside a function.
+            41..=52 => values += 1,
+            op::VARIABLE if !in_function => values += 1,
+            _ => {}
+        }
+        at += count.max(1);
+    }
+    (functions, values)
+}
+
+/// SPIR-V opcodes [`spec_constants`] and [`spirv_reread_size`] read or write.
 mod op {
     pub const TYPE_INT: u32 = 21;
     pub const TYPE_FLOAT: u32 = 22;
@@ -335,6 +393,8 @@ mod op {
     pub const CONSTANT_COMPOSITE: u32 = 44;
     pub const SPEC_CONSTANT: u32 = 50;
     pub const FUNCTION: u32 = 54;
+    pub const FUNCTION_END: u32 = 56;
+    pub const VARIABLE: u32 = 59;
     pub const DECORATE: u32 = 71;
     /// `OpDecorate` … `OpGroupMemberDecorate`, `OpDecorateId`, `OpDecorateString`,
     /// `OpMemberDecorateString`: the annotations section of the logical layout.

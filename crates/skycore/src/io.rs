@@ -296,6 +296,22 @@ pub fn check_output(path: &Path) -> io::Result<PathBuf> {
     Ok(target)
 }
 
+/// Bytes free to an unprivileged writer on the file system holding `dir` (`statvfs`'s
+/// `f_bavail × f_frsize`); `None` where the platform or the path does not say. For estimates
+/// made before long work (`gdsky animate`), never for correctness: the space can change at once.
+pub fn available_space(dir: &Path) -> Option<u64> {
+    #[cfg(unix)]
+    {
+        let stat = rustix::fs::statvfs(dir).ok()?;
+        Some(stat.f_bavail.saturating_mul(stat.f_frsize))
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = dir;
+        None
+    }
+}
+
 /// `path` with `.` and `..` resolved lexically (no file is touched, links are not followed): the
 /// form in which a path is compared with the folder it must stay in. A `..` above a root stays
 /// at the root; leading `..` of a relative path are kept.
@@ -397,9 +413,18 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> io::Result<()> {
 /// disk are they renamed into place, in order. A failure while writing (a full disk, a path
 /// refused) removes every temporary file and leaves every target as it was. Each rename is
 /// atomic, but the set's renames follow each other: a crash between two leaves the first new
-/// and the rest old.
+/// and the rest old. While the renames run, each target folder is locked (an advisory `flock`
+/// on the folder itself, best effort), so two gdsky processes writing sets into one folder
+/// commit one whole set after the other, never a mix of both.
 pub fn write_set(files: &[(&Path, &[u8])]) -> io::Result<()> {
     let staged = files.iter().map(|(path, bytes)| stage(path, bytes)).collect::<io::Result<Vec<_>>>()?;
+    let mut folders: Vec<PathBuf> = staged.iter().map(|f| parent_dir(&f.target).to_path_buf()).collect();
+    // One order for every process, so two sets over the same folders cannot deadlock.
+    folders.sort();
+    folders.dedup();
+    // Held until the renames are done; dropping a file releases its lock.
+    let _locks: Vec<fs::File> =
+        folders.iter().filter_map(|dir| fs::File::open(dir).ok()).filter(|dir| dir.lock().is_ok()).collect();
     for file in staged {
         file.commit()?;
     }

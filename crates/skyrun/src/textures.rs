@@ -44,6 +44,39 @@ pub fn texture_from_image(image: &Image) -> Result<TextureData, TextureError> {
     TextureData::new(image.width, image.height, TexelFormat::Rgba32Float, bytes)
 }
 
+/// The texel bytes a texture file will decode to, from its header alone (the first MiB of the
+/// file): PNG 4 bytes a texel, OpenEXR 8 (half RGBA) or 16 (float). `None` when the header does
+/// not tell (not a regular file, not PNG or OpenEXR, a header past the first MiB): the full read
+/// then refuses what it must. Used to refuse a stack of cube faces or volume slices before any
+/// of them is decoded.
+pub fn decoded_bytes(path: &Path) -> Option<u64> {
+    use std::io::Read;
+    if !std::fs::metadata(path).ok()?.is_file() {
+        return None;
+    }
+    let mut head = Vec::new();
+    std::fs::File::open(path).ok()?.take(1 << 20).read_to_end(&mut head).ok()?;
+    if head.starts_with(b"\x89PNG\r\n\x1a\n") && head.len() >= 24 && &head[12..16] == b"IHDR" {
+        let side = |at: usize| u64::from(u32::from_be_bytes([head[at], head[at + 1], head[at + 2], head[at + 3]]));
+        return Some(side(16) * side(20) * 4);
+    }
+    if head.starts_with(&[0x76, 0x2f, 0x31, 0x01]) {
+        let meta = exr::meta::MetaData::read_from_buffered(Cursor::new(&head), false).ok()?;
+        let header = meta.headers.first()?;
+        let half = ["R", "G", "B", "A"].iter().all(|name| {
+            header
+                .channels
+                .list
+                .iter()
+                .find(|c| c.name.eq(name))
+                .is_none_or(|c| c.sample_type == exr::meta::attribute::SampleType::F16)
+        });
+        let texels = header.layer_size.width() as u64 * header.layer_size.height() as u64;
+        return Some(texels * if half { 8 } else { 16 });
+    }
+    None
+}
+
 /// Reads a texture file, recognised by its first bytes:
 ///
 /// * OpenEXR → [`TexelFormat::Rgba32Float`], every float as stored (alpha 1 when absent;

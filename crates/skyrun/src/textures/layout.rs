@@ -125,8 +125,21 @@ pub fn read_volume(paths: &[PathBuf], grid: Option<(u32, u32)>, srgb: bool) -> R
 /// before it exhausts memory.
 pub const MAX_ASSEMBLED_BYTES: u64 = 2 << 30;
 
-/// Reads every file in order, refusing the set once its texels pass [`MAX_ASSEMBLED_BYTES`].
+/// Reads every file in order, refusing the set once its texels pass [`MAX_ASSEMBLED_BYTES`]:
+/// first from the headers of all files ([`super::decoded_bytes`]), before any is decoded; then,
+/// for files whose header did not tell, after each read.
 fn read_all(paths: &[PathBuf], srgb: bool) -> Result<Vec<TextureData>, TextureError> {
+    let claimed: u64 = paths.iter().filter_map(|p| super::decoded_bytes(p)).sum();
+    if claimed > MAX_ASSEMBLED_BYTES {
+        return Err(TextureError::Layout(format!(
+            "{}: the {} files' headers claim {} MiB of texels, more than one texture may hold ({} MiB); nothing was \
+             decoded",
+            list(paths),
+            paths.len(),
+            claimed >> 20,
+            MAX_ASSEMBLED_BYTES >> 20
+        )));
+    }
     let mut total = 0u64;
     let mut layers = Vec::with_capacity(paths.len());
     for path in paths {
@@ -311,5 +324,26 @@ mod tests {
         assert!(err.contains("a.png is 2×2") && err.contains("b.png is 4×2"), "{err}");
         let v = read_volume(&[a.clone(), a], None, true).expect("reads");
         assert_eq!((v.layers(), v.format()), (2, TexelFormat::Rgba8UnormSrgb));
+    }
+
+    #[test]
+    fn a_stack_is_refused_from_its_headers_before_any_file_is_decoded() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        // Nine files of 41 bytes, each a PNG signature and an IHDR claiming 8192² RGBA (256 MiB
+        // decoded): 2.25 GiB in all. Their pixel data is missing, so decoding any of them would
+        // fail with another message.
+        let mut head = b"\x89PNG\r\n\x1a\n\0\0\0\x0dIHDR".to_vec();
+        head.extend_from_slice(&8192u32.to_be_bytes());
+        head.extend_from_slice(&8192u32.to_be_bytes());
+        head.extend_from_slice(&[8, 6, 0, 0, 0, 0, 0, 0, 0]);
+        let paths: Vec<PathBuf> = (0..9).map(|i| dir.path().join(format!("s{i}.png"))).collect();
+        for p in &paths {
+            std::fs::write(p, &head).expect("writes");
+        }
+        let err = read_volume(&paths, None, false).expect_err("refused").to_string();
+        assert!(err.contains("headers claim 2304 MiB") && err.contains("nothing was decoded"), "{err}");
+        // Under the budget, the same files reach the decoder, which refuses the missing data.
+        let err = read_volume(&paths[..2], None, false).expect_err("refused").to_string();
+        assert!(!err.contains("headers claim"), "{err}");
     }
 }
