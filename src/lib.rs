@@ -56,6 +56,8 @@ mod rust_struct;
 pub mod engine;
 #[cfg(feature = "engines")]
 pub mod measure;
+#[cfg(feature = "preview")]
+pub mod preview;
 #[cfg(feature = "engines")]
 pub mod scene;
 #[cfg(feature = "testing")]

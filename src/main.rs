@@ -132,6 +132,15 @@ enum Command {
     /// interleaved rounds. Exit status: 0 written, 1 a flag or the shader is invalid or no
     /// configuration is within the budget, 2 no Vulkan adapter or an output cannot be written.
     Tune(cli::tune::TuneArgs),
+    /// Show a sky shader live in the browser: its WGSL in WebGPU, Godot's inspector built from
+    /// the reflection, reloaded when the file, an include or a texture changes.
+    ///
+    /// Serves one page on http://127.0.0.1:PORT/ (never another interface; nothing from the file
+    /// system by path) and opens the default browser unless --no-open. The page needs WebGPU
+    /// (Chrome, Edge; Firefox and Safari with WebGPU on). A change that breaks the shader shows
+    /// gdsky's located diagnostic over the last good frame. Runs until Ctrl-C. Exit status: 0
+    /// stopped, 1 a flag is invalid, 2 the port cannot be bound (docs/preview.md).
+    Preview(cli::preview::PreviewArgs),
 }
 
 fn main() -> ExitCode {
@@ -162,5 +171,6 @@ fn main() -> ExitCode {
         Command::Animate(args) => cli::animate::run(&args, &sub),
         Command::BakeLut(args) => cli::bake_lut::run(&args),
         Command::Tune(args) => cli::tune::run(&args),
+        Command::Preview(args) => cli::preview::run(&args, &sub),
     }
 }

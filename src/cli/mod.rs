@@ -26,6 +26,7 @@ pub mod convert;
 pub mod demo;
 pub mod edge;
 pub mod oracle;
+pub mod preview;
 pub mod progress;
 pub mod render;
 pub mod scene;

@@ -17,6 +17,7 @@ mod glsl_semantics;
 mod godot_materials;
 mod lavapipe_loop_limit;
 mod overrides;
+mod preview_server;
 mod process_edge;
 mod render;
 mod safe_io;

@@ -8,6 +8,7 @@ mod cube_oracle;
 mod godot_frontend;
 mod godot_parity;
 mod noise_oracle;
+mod preview;
 mod ramp_oracle;
 mod seed_skies;
 #[cfg(feature = "testing")]
