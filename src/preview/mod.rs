@@ -19,6 +19,7 @@
 //! | `/material.bin` | the material block's bytes: the shader's defaults with the file's and `--set` values |
 //! | `/texture/N` | texture N's texels, as the state lists them |
 //! | `/events` | server-sent events: `state` with the new version whenever it changes |
+//! | `POST /render` | the page's state (scene, material block) rendered by gdsky on Vulkan: raw f32 RGBA, `X-Width`/`X-Height` |
 //!
 //! Every request must name the server as its `Host` (`127.0.0.1:PORT` or `localhost:PORT`), so
 //! a DNS-rebinding page cannot reach it, and a request that carries an `Origin` must come from
@@ -29,6 +30,7 @@
 //! (cos e sin a, sin e, −cos e cos a); the camera's basis is R_y(yaw)·R_x(pitch)), so its pixels,
 //! read back, are comparable with `gdsky render` of the same state (tests/godot/preview.rs).
 
+mod lavapipe;
 mod server;
 mod state;
 

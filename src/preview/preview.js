@@ -31,14 +31,73 @@ async function init() {
   requestAnimationFrame(loop);
 }
 
-function noWebGPU(why) {
+// Without WebGPU: say so, and show gdsky's own render (Vulkan, on the server) of the start state.
+async function noWebGPU(why) {
   const box = $('nogpu');
   box.style.display = 'block';
-  box.textContent = `gdsky preview needs WebGPU: ${why}. Use Chrome or Edge (113+), or Firefox/Safari with ` +
-    'WebGPU enabled; `gdsky render FILE -o sky.png` renders the same sky with Vulkan.';
-  $('sky').style.display = 'none';
-  status('no WebGPU');
+  box.textContent = `gdsky preview needs WebGPU for a live sky: ${why}. Use Chrome or Edge (113+), or ` +
+    'Firefox/Safari with WebGPU enabled. Below: gdsky\'s own render of this sky (Vulkan, on the server).';
+  status('no WebGPU: showing gdsky\'s render');
   G.error = why;
+  const s = await (await fetch('/state.json', { cache: 'no-store' })).json();
+  if (!s.wgsl) return showError(s.error);
+  st = s;
+  scene = structuredClone(s.scene);
+  material = new Uint8Array(await (await fetch('/material.bin', { cache: 'no-store' })).arrayBuffer());
+  const image = await lavapipe();
+  G.pixels = image.pixels;
+  G.width = image.width;
+  G.height = image.height;
+  show(image.pixels, image.width, image.height);
+  G.fallbackFrames = (G.fallbackFrames || 0) + 1;
+}
+
+// gdsky's render of the page's state (the server's Vulkan device): {width, height, pixels}.
+async function lavapipe() {
+  const body = JSON.stringify({
+    projection: scene.projection, width: scene.width, height: scene.height, time: scene.time,
+    lights: scene.lights, camera: scene.camera, material: Array.from(material),
+  });
+  const response = await fetch('/render', { method: 'POST', body, headers: { 'Content-Type': 'application/json' } });
+  if (!response.ok) throw new Error(`gdsky render: ${await response.text()}`);
+  const width = Number(response.headers.get('X-Width')), height = Number(response.headers.get('X-Height'));
+  return { width, height, pixels: new Float32Array(await response.arrayBuffer()) };
+}
+
+// The page's frame beside gdsky's render of the same state, and their relative error per pixel
+// (the largest of R, G, B; |a − b| / max(|b|, 1e-4), as `gdsky compare`).
+async function compare() {
+  await G.nextFrame();
+  const page = { pixels: G.pixels, width: G.width, height: G.height };
+  const theirs = await lavapipe();
+  if (theirs.width !== page.width || theirs.height !== page.height) throw new Error('the two images differ in size');
+  const n = page.width * page.height, rel = new Float64Array(n);
+  for (let i = 0; i < n; i++) {
+    let worst = 0;
+    for (let c = 0; c < 3; c++) {
+      const a = page.pixels[4 * i + c], b = theirs.pixels[4 * i + c];
+      worst = Math.max(worst, Math.abs(a - b) / Math.max(Math.abs(b), 1e-4));
+    }
+    rel[i] = worst;
+  }
+  const sorted = Float64Array.from(rel).sort();
+  const stats = { max: sorted[n - 1], p99: sorted[Math.max(0, Math.ceil(0.99 * n) - 1)], mean: sorted.reduce((a, b) => a + b, 0) / n };
+  show(page.pixels, page.width, page.height, $('compare-page'));
+  show(theirs.pixels, theirs.width, theirs.height, $('compare-gdsky'));
+  const heat = $('compare-heat');
+  heat.width = page.width;
+  heat.height = page.height;
+  const ctx = heat.getContext('2d'), image = ctx.createImageData(page.width, page.height);
+  for (let i = 0; i < n; i++) {
+    const t = rel[i] > 0 ? Math.min(1, Math.max(0, (Math.log10(rel[i]) + 6) / 5)) : 0;
+    image.data.set([255 * Math.min(1, 2 * t), 255 * Math.max(0, 2 * t - 1), 255 * Math.max(0, 1 - 2 * Math.abs(t - 0.35)), 255], 4 * i);
+  }
+  ctx.putImageData(image, 0, 0);
+  $('compare').style.display = 'block';
+  $('compare-stats').textContent = `relative error of this page against gdsky render: max ${stats.max.toExponential(2)}, ` +
+    `p99 ${stats.p99.toExponential(2)}, mean ${stats.mean.toExponential(2)} (${page.width}×${page.height})`;
+  G.comparison = stats;
+  return stats;
 }
 
 async function loadState(first) {
@@ -263,8 +322,7 @@ async function render() {
 }
 
 // The tone map of `gdsky render --png`: 1 − exp(−L · exposure), then a 1/2.2 power.
-function show(pixels, width, height) {
-  const canvas = $('sky');
+function show(pixels, width, height, canvas = $('sky')) {
   canvas.width = width;
   canvas.height = height;
   const ctx = canvas.getContext('2d');
@@ -475,6 +533,7 @@ function wireBar() {
     buildSceneControls();
     dirty = true;
   }
+  $('compare-button').addEventListener('click', () => compare().catch((e) => showError(String(e.message || e))));
   $('export-set').addEventListener('click', () => ($('export').value = exportFlags()));
   $('export-toml').addEventListener('click', () => ($('export').value = exportToml()));
   $('export-tres').addEventListener('click', () => ($('export').value = exportTres()));
@@ -531,7 +590,7 @@ function exportTres() {
 Object.assign(G, {
   setUniform,
   setScene(patch) { Object.assign(scene, patch); if (patch.sun) Object.assign(scene.lights[0], patch.sun); dirty = true; },
-  exportFlags, exportToml, exportTres,
+  exportFlags, exportToml, exportTres, compare,
   // Resolves with the next frame rendered after the call.
   async nextFrame() {
     const start = G.frames;

@@ -1,6 +1,7 @@
 //! The local HTTP server (tiny_http), its routes and checks, the file watcher (notify) and the
 //! server-sent events that tell the page a new state is ready.
 
+use super::lavapipe::Renderer;
 use super::state::PageState;
 use crate::engine::Error;
 use std::io::Write;
@@ -113,6 +114,7 @@ impl Preview {
         rewatch(&mut watcher, &mut watching, &files);
 
         let server = self.server.clone();
+        let renderer = Arc::new(Renderer::default());
         let shared = self.shared.clone();
         let addr = self.addr;
         let stop = self.stop.clone();
@@ -120,9 +122,8 @@ impl Preview {
             while !stop.load(Ordering::Relaxed) {
                 match server.recv_timeout(Duration::from_millis(100)) {
                     Ok(Some(request)) => {
-                        let shared = shared.clone();
-                        let stop = stop.clone();
-                        std::thread::spawn(move || respond(request, addr, &shared, &stop));
+                        let (shared, stop, renderer) = (shared.clone(), stop.clone(), renderer.clone());
+                        std::thread::spawn(move || respond(request, addr, &shared, &stop, &renderer));
                     }
                     Ok(None) => {}
                     Err(_) => break,
@@ -182,7 +183,13 @@ fn same(a: &PageState, b: &PageState) -> bool {
 }
 
 /// Answers one request: the checks, then the route.
-fn respond(request: tiny_http::Request, addr: SocketAddr, shared: &Arc<(Mutex<Shared>, Condvar)>, stop: &AtomicBool) {
+fn respond(
+    request: tiny_http::Request,
+    addr: SocketAddr,
+    shared: &Arc<(Mutex<Shared>, Condvar)>,
+    stop: &AtomicBool,
+    renderer: &Renderer,
+) {
     use tiny_http::{Header, Response, StatusCode};
     let header = |name: &'static str| {
         request.headers().iter().find(|h| h.field.equiv(name)).map(|h| h.value.as_str().to_string())
@@ -200,11 +207,15 @@ fn respond(request: tiny_http::Request, addr: SocketAddr, shared: &Arc<(Mutex<Sh
         let _ = request.respond(text(403, "403: gdsky preview answers only its own page on 127.0.0.1\n"));
         return;
     }
-    if *request.method() != tiny_http::Method::Get {
-        let _ = request.respond(text(405, "405: only GET\n"));
+    let path = request.url().split('?').next().unwrap_or("").to_string();
+    if *request.method() == tiny_http::Method::Post && path == "/render" {
+        render(request, shared, renderer);
         return;
     }
-    let path = request.url().split('?').next().unwrap_or("").to_string();
+    if *request.method() != tiny_http::Method::Get {
+        let _ = request.respond(text(405, "405: only GET, and POST /render\n"));
+        return;
+    }
     let snapshot = |f: &dyn Fn(&Shared) -> Option<Body>| shared.0.lock().ok().and_then(|s| f(&s));
     let body = match path.as_str() {
         "/" | "/index.html" => Some((PAGE_HTML.as_bytes().to_vec(), "text/html; charset=utf-8")),
@@ -233,6 +244,41 @@ fn respond(request: tiny_http::Request, addr: SocketAddr, shared: &Arc<(Mutex<Sh
             let _ = request.respond(text(404, "404: not something gdsky preview serves\n"));
             return;
         }
+    };
+    let _ = request.respond(response);
+}
+
+/// `POST /render`: the JSON body (at most 1 MiB) rendered by [`Renderer`] with the last good
+/// state's shader; 400 with the reason for a body it cannot render.
+fn render(mut request: tiny_http::Request, shared: &Arc<(Mutex<Shared>, Condvar)>, renderer: &Renderer) {
+    use std::io::Read;
+    use tiny_http::{Header, Response, StatusCode};
+    let fail = |status: u16, message: String| {
+        Response::from_string(format!("{message}\n"))
+            .with_status_code(StatusCode(status))
+            .with_header(content_type("text/plain; charset=utf-8"))
+    };
+    let mut body = Vec::new();
+    if request.as_reader().take((1 << 20) + 1).read_to_end(&mut body).is_err() || body.len() > 1 << 20 {
+        let _ = request.respond(fail(400, "the body is not readable or over 1 MiB".into()));
+        return;
+    }
+    let sky = shared.0.lock().ok().and_then(|s| s.good.as_ref().and_then(|g| g.sky.clone()));
+    let Some(sky) = sky else {
+        let _ = request.respond(fail(409, "no shader has converted yet".into()));
+        return;
+    };
+    let outcome =
+        serde_json::from_slice(&body).map_err(|e| format!("not JSON: {e}")).and_then(|v| renderer.render(&sky, &v));
+    let response = match outcome {
+        Ok((width, height, pixels)) => {
+            let bytes: Vec<u8> = pixels.iter().flat_map(|p| p.iter().flat_map(|c| c.to_le_bytes())).collect();
+            Response::from_data(bytes)
+                .with_header(content_type("application/octet-stream"))
+                .with_header(Header::from_bytes("X-Width", width.to_string()).expect("a valid header"))
+                .with_header(Header::from_bytes("X-Height", height.to_string()).expect("a valid header"))
+        }
+        Err(message) => fail(400, message),
     };
     let _ = request.respond(response);
 }

@@ -8,7 +8,7 @@ use std::collections::HashMap;
 use std::path::PathBuf;
 
 /// One converted state of the input, ready to serve.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Default)]
 pub struct PageState {
     /// `/state.json` without its `version` and `error` (the server adds them).
     pub state: serde_json::Value,
@@ -16,6 +16,8 @@ pub struct PageState {
     pub material: Vec<u8>,
     /// `/texture/N`: each texture's texels, its mip levels after it, as `state.textures` lists them.
     pub textures: Vec<Vec<u8>>,
+    /// The loaded shader, for `POST /render` (gdsky's own render of the page's state).
+    pub sky: Option<std::sync::Arc<Sky>>,
     /// The files the state came from: the shader and its includes, the scene file or material,
     /// the textures. A change to any of them reloads.
     pub watched: Vec<PathBuf>,
@@ -153,7 +155,7 @@ pub fn load_state(input: &Input, setup: &Setup) -> Result<PageState, Error> {
     watched.extend(setup.textures.iter().filter_map(|t| t.split_once('=').map(|(_, p)| PathBuf::from(p))));
     watched.sort();
     watched.dedup();
-    Ok(PageState { state, material, textures, watched })
+    Ok(PageState { state, material, textures, watched, sky: Some(std::sync::Arc::new(loaded)) })
 }
 
 /// The WebGPU format name of a texel format.

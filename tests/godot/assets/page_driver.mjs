@@ -1,5 +1,6 @@
 // Drives one page in headless Chromium with WebGPU (SwiftShader) for tests/godot/preview.rs:
-//   node page_driver.mjs ORACLE_DIR CHROMIUM URL
+//   node page_driver.mjs ORACLE_DIR CHROMIUM URL [no-webgpu]
+// (`no-webgpu`: the page sees a browser without WebGPU, navigator.gpu undefined)
 // then one JSON line per request on stdin, {"js": "expression"}, answered on stdout by
 // {"ok": true, "value": ...} or {"ok": false, "error": "..."}; the expression is evaluated in the
 // page and awaited. The first line out is {"event": "loaded"} once the page has loaded.
@@ -8,7 +9,7 @@ import path from 'node:path';
 import readline from 'node:readline';
 import { createRequire } from 'node:module';
 
-const [oracleDir, chromiumPath, url] = process.argv.slice(2);
+const [oracleDir, chromiumPath, url, mode] = process.argv.slice(2);
 const require = createRequire(path.join(oracleDir, 'package.json'));
 const { chromium } = require('playwright-core');
 
@@ -26,6 +27,7 @@ const browser = await chromium.launch({
 const page = await browser.newPage({ viewport: { width: 1200, height: 700 } });
 page.on('console', (m) => console.error(`console.${m.type()}: ${m.text()}`));
 page.on('pageerror', (e) => console.error(`pageerror: ${(e && e.stack) || e}`));
+if (mode === 'no-webgpu') await page.addInitScript(() => Object.defineProperty(navigator, 'gpu', { value: undefined }));
 await page.goto(url);
 console.log(JSON.stringify({ event: 'loaded' }));
 
