@@ -13,6 +13,7 @@ mod cubemap;
 mod debanding;
 mod defects;
 mod depth_and_resolution;
+mod glsl_cases;
 mod glsl_semantics;
 mod godot_materials;
 mod lavapipe_loop_limit;

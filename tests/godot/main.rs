@@ -7,6 +7,10 @@ mod corpus;
 mod cube_oracle;
 mod godot_frontend;
 mod godot_parity;
+// The GLSL-semantics cases, for the Tint run; their expected values are the CLI suite's.
+#[allow(dead_code)]
+#[path = "../cli/glsl_cases.rs"]
+mod glsl_cases;
 mod noise_oracle;
 mod preview;
 mod ramp_oracle;

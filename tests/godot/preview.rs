@@ -286,8 +286,9 @@ fn a_broken_edit_shows_the_diagnostic_over_the_last_good_frame() {
 
 /// Every WGSL module gdsky emits for the shipped skies, the fixture and the test shaders
 /// (tests/shaders/valid, tests/shaders/textures), at their defaults, with every uniform baked,
-/// and with the first scalar float uniform as an override: compiled by Chromium's WebGPU (Tint),
-/// with `getCompilationInfo` clean and a render pipeline built for each fragment entry.
+/// and with the first scalar float uniform as an override, and for the GLSL-semantics cases:
+/// compiled by Chromium's WebGPU (Tint), with `getCompilationInfo` clean and a render pipeline
+/// built for each fragment entry.
 #[test]
 fn tint_accepts_every_module_gdsky_emits() {
     let dir = scratch("preview", "tint");
@@ -327,6 +328,17 @@ fn tint_accepts_every_module_gdsky_emits() {
             modules.push((format!("{} (--override {name})", shader.display()), wgsl));
         }
     }
+    // The GLSL-semantics cases (tests/cli/glsl_cases.rs), at their defaults.
+    let cases = crate::glsl_cases::cases();
+    for case in &cases {
+        let path = dir.join(format!("{}.gdshader", case.name));
+        std::fs::write(&path, crate::glsl_cases::source(case)).expect("writes the case");
+        let out = dir.join(format!("case-{}", case.name));
+        let o = gdsky(&["convert", path.to_str().expect("utf-8"), "-o", out.to_str().expect("utf-8")]);
+        assert!(o.status.success(), "{}: {}", case.name, text(&o));
+        let wgsl = std::fs::read_to_string(out.join(format!("{}.wgsl", case.name))).expect("the WGSL");
+        modules.push((format!("GLSL-semantics case {}", case.name), wgsl));
+    }
     let mut page = Page::open(&["--size", "16x8"]);
     let started = Instant::now();
     let mut refused = Vec::new();
@@ -341,10 +353,11 @@ fn tint_accepts_every_module_gdsky_emits() {
         }
     }
     println!(
-        "Tint: {} of {} emitted modules accepted ({} shaders; {:.1} s in Chromium)",
+        "Tint: {} of {} emitted modules accepted ({} shaders, {} GLSL-semantics cases; {:.1} s in Chromium)",
         modules.len() - refused.len(),
         modules.len(),
         shaders.len(),
+        cases.len(),
         started.elapsed().as_secs_f64()
     );
     assert!(refused.is_empty(), "Tint refused:\n{}", refused.join("\n"));

@@ -101,8 +101,25 @@ pub fn to_wgsl(lowered: &Lowered) -> Result<String, EmitError> {
             limitation: None,
         },
     )?;
+    let text = exact_f32_max(text);
     reread_wgsl(&lowered.module, &text)?;
     Ok(text)
+}
+
+/// The largest finite f32 as naga's WGSL writer prints it: Rust's shortest round-trip form,
+/// 3.4028235e38 written out, which is *above* f32::MAX (3.4028234663852886e38) and rounds down to
+/// it. WGSL requires a literal's value to be representable in its type, and Chromium's compiler
+/// (Tint) holds to that ("value cannot be represented as 'f32'"; naga rounds). No other f32 is
+/// affected: below the largest, the shortest form that reads back as a value never passes the
+/// largest finite one.
+const F32_MAX_AS_WRITTEN: &str = "340282350000000000000000000000000000000f";
+/// f32::MAX exactly, (2 − 2⁻²³)·2¹²⁷: the same value, within the type, for every compiler.
+const F32_MAX_EXACT: &str = "340282346638528859811704183484516925440f";
+
+/// [`F32_MAX_AS_WRITTEN`] replaced by [`F32_MAX_EXACT`] (a literal of either sign; the digits can
+/// be nothing but a float literal in WGSL text). Found by the Tint run in tests/godot/preview.rs.
+fn exact_f32_max(text: String) -> String {
+    if text.contains(F32_MAX_AS_WRITTEN) { text.replace(F32_MAX_AS_WRITTEN, F32_MAX_EXACT) } else { text }
 }
 
 /// How deep one expression may nest in WGSL text before it is given a name (`let`). naga's WGSL
@@ -740,5 +757,36 @@ mod guard_tests {
         let message = outcome.expect_err("the panic is caught");
         assert!(message.contains("naga panicked re-reading a test") && message.contains("nothing was written"));
         assert_eq!(super::guarded("re-reading a test", || 7), Ok(7));
+    }
+
+    /// The largest f32 is written exactly: what naga's writer prints for it (Rust's shortest
+    /// form) is above it, and the exact digits read back as the same f32.
+    #[test]
+    fn the_largest_f32_is_written_within_its_type() {
+        assert_eq!(format!("{}f", f32::MAX), super::F32_MAX_AS_WRITTEN);
+        let exact = super::F32_MAX_EXACT.trim_end_matches('f');
+        assert_eq!(exact.parse::<f32>(), Ok(f32::MAX));
+        // (2 − 2⁻²³)·2¹²⁷ = (2²⁴ − 1)·2¹⁰⁴, in decimal digits.
+        let mut digits = vec![0u32];
+        let mut multiply = |by: u64, add: u64| {
+            let mut carry = add;
+            for d in digits.iter_mut() {
+                let v = u64::from(*d) * by + carry;
+                *d = (v % 10) as u32;
+                carry = v / 10;
+            }
+            while carry > 0 {
+                digits.push((carry % 10) as u32);
+                carry /= 10;
+            }
+        };
+        multiply(1, (1 << 24) - 1);
+        for _ in 0..104 {
+            multiply(2, 0);
+        }
+        let decimal: String = digits.iter().rev().map(|d| char::from_digit(*d, 10).unwrap_or('?')).collect();
+        assert_eq!(decimal, exact);
+        let text = super::exact_f32_max("const M: f32 = -340282350000000000000000000000000000000f;".into());
+        assert_eq!(text, "const M: f32 = -340282346638528859811704183484516925440f;");
     }
 }
