@@ -10,6 +10,8 @@ const RAD = Math.PI / 180; // as Rust's f64::to_radians: x · (π / 180)
 let device, st, scene, layouts, pipelines = {}, groups = [], buffers = {}, material, exposure = 0.5;
 let playing = false, speed = 1, dirty = true, busy = false, lastT = performance.now();
 const edited = new Map(); // uniform name → values the user set on the page
+const dropped = new Map(); // "group:binding" → a texture the user dropped on the page
+let served = []; // the textures the server sent
 
 const status = (text) => ($('status').textContent = text);
 function showError(text) {
@@ -169,17 +171,28 @@ async function build(s, textures) {
       primitive: { topology: 'triangle-list' },
     });
   }
-  buffers = {};
-  groups = [];
-  for (let g = 0; g <= maxGroup; g++) {
-    const entries = s.bindings.filter((b) => b.group === g).map((b) => ({ binding: b.binding, resource: resource(s, b, textures) }));
-    groups.push(device.createBindGroup({ layout: layouts[g], entries }));
+  // Textures the user dropped on the page stay while their binding does.
+  for (const [key, t] of dropped) {
+    if (!s.bindings.some((b) => `${b.group}:${b.binding}` === key && b.kind === 'texture')) dropped.delete(key);
   }
+  served = textures;
+  makeGroups(s);
   const error = await device.popErrorScope();
   if (error) throw new Error(`WebGPU refused the pipeline: ${error.message}`);
 }
 
-function resource(s, b, textures) {
+// The bind groups: fresh uniform buffers (each frame writes them), the served textures with
+// the dropped ones over them, stand-ins for the rest.
+function makeGroups(s) {
+  buffers = {};
+  groups = layouts.map((layout, g) => {
+    const entries = s.bindings.filter((b) => b.group === g).map((b) => ({ binding: b.binding, resource: resource(s, b) }));
+    return device.createBindGroup({ layout, entries });
+  });
+}
+
+function resource(s, b) {
+  const textures = [...dropped.values(), ...served];
   if (b.kind === 'uniform') {
     const buffer = device.createBuffer({ size: Math.max(16, b.size), usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST });
     buffers[`${b.group}:${b.binding}`] = buffer;
@@ -414,6 +427,61 @@ function buildInspector() {
     return parent;
   };
   for (const u of uniforms()) place(u.group).append(control(u));
+  const slots = st.reflection.bindings.textures;
+  if (slots.length) {
+    const box = section(root, 'Textures', true);
+    for (const slot of slots) box.append(textureRow(slot));
+  }
+}
+
+// One texture: what is bound (a served texture, one dropped here, or the hint's stand-in), a
+// thumbnail of a 2D 8-bit one, and a drop target: a PNG, JPEG or WebP dropped on the row replaces
+// it (one level, 8-bit; `source_color` decodes it as sRGB, as gdsky does).
+function textureRow(slot) {
+  const key = `${slot.group}:${slot.binding}`;
+  const t = dropped.get(key) || served.find((x) => `${x.group}:${x.binding}` === key);
+  const div = row(slot.name, slot.doc || `${slot.type} ${slot.name}`);
+  div.dataset.texture = slot.name;
+  const info = document.createElement('span');
+  info.textContent = t ? `${t.width}×${t.height}${t.layers > 1 ? `×${t.layers}` : ''} ${t.format}${dropped.has(key) ? ' (dropped)' : ''}`
+    : `stand-in (${slot.default || (slot.hints.includes('hint_normal') ? 'normal' : 'white')}); drop an image here`;
+  const thumb = document.createElement('canvas');
+  thumb.style.width = '48px';
+  if (t && t.dimension === '2d' && t.bytes_per_texel === 4) {
+    thumb.width = t.width;
+    thumb.height = t.height;
+    const image = thumb.getContext('2d').createImageData(t.width, t.height);
+    image.data.set(t.data.subarray(0, t.width * t.height * 4));
+    thumb.getContext('2d').putImageData(image, 0, 0);
+  } else {
+    thumb.width = thumb.height = 1;
+  }
+  div.append(info, thumb);
+  div.addEventListener('dragover', (e) => e.preventDefault());
+  div.addEventListener('drop', (e) => {
+    e.preventDefault();
+    const file = e.dataTransfer.files[0];
+    if (file) replaceTexture(slot, file).catch((err) => showError(`${file.name}: ${err.message || err}`));
+  });
+  return div;
+}
+
+async function replaceTexture(slot, blob) {
+  const binding = st.bindings.find((b) => b.group === slot.group && b.binding === slot.binding);
+  if (!binding || binding.dimension !== '2d') throw new Error('only a 2D texture can be replaced by dropping an image');
+  const bitmap = await createImageBitmap(blob, { colorSpaceConversion: 'none', premultiplyAlpha: 'none' });
+  const canvas = new OffscreenCanvas(bitmap.width, bitmap.height);
+  const ctx = canvas.getContext('2d');
+  ctx.drawImage(bitmap, 0, 0);
+  const data = new Uint8Array(ctx.getImageData(0, 0, bitmap.width, bitmap.height).data.buffer);
+  dropped.set(`${slot.group}:${slot.binding}`, {
+    name: slot.name, group: slot.group, binding: slot.binding, width: bitmap.width, height: bitmap.height, layers: 1,
+    levels: [[bitmap.width, bitmap.height]], format: slot.srgb ? 'rgba8unorm-srgb' : 'rgba8unorm', bytes_per_texel: 4,
+    dimension: '2d', data,
+  });
+  makeGroups(st);
+  buildInspector();
+  dirty = true;
 }
 
 function row(labelText, title) {
@@ -497,6 +565,31 @@ function buildSceneControls() {
   slider($('sun'), 'azimuth °', -180, 180, 0.1, () => sun().azimuth_deg, (v) => (sun().azimuth_deg = v));
   slider($('sun'), 'energy', 0, 16, 0.01, () => sun().energy, (v) => (sun().energy = v));
   slider($('sun'), 'size °', 0, 10, 0.01, () => sun().size_deg, (v) => (sun().size_deg = v));
+  const colour = row('colour');
+  const pick = document.createElement('input');
+  pick.type = 'color';
+  const hex = (v) => Math.round(Math.min(1, Math.max(0, v)) * 255).toString(16).padStart(2, '0');
+  pick.value = `#${sun().color.map(hex).join('')}`;
+  pick.addEventListener('input', () => { sun().color = [1, 3, 5].map((i) => parseInt(pick.value.slice(i, i + 2), 16) / 255); dirty = true; });
+  colour.append(pick, document.createElement('span'));
+  $('sun').append(colour);
+  for (let i = 1; i < scene.lights.length; i++) {
+    const box = $(`light${i}`);
+    if (!box) continue;
+    const light = () => scene.lights[i];
+    box.textContent = '';
+    const on = row('enabled');
+    const check = document.createElement('input');
+    check.type = 'checkbox';
+    check.checked = light().enabled;
+    check.addEventListener('change', () => { light().enabled = check.checked; dirty = true; });
+    on.append(check, document.createElement('span'));
+    box.append(on);
+    slider(box, 'elevation °', -90, 90, 0.1, () => light().elevation_deg, (v) => (light().elevation_deg = v));
+    slider(box, 'azimuth °', -180, 180, 0.1, () => light().azimuth_deg, (v) => (light().azimuth_deg = v));
+    slider(box, 'energy', 0, 16, 0.01, () => light().energy, (v) => (light().energy = v));
+    slider(box, 'size °', 0, 10, 0.01, () => light().size_deg, (v) => (light().size_deg = v));
+  }
   $('camera').textContent = '';
   slider($('camera'), 'yaw °', -180, 180, 0.1, () => cam().yaw_deg, (v) => (cam().yaw_deg = v));
   slider($('camera'), 'pitch °', -89, 89, 0.1, () => cam().pitch_deg, (v) => (cam().pitch_deg = v));
@@ -591,6 +684,12 @@ Object.assign(G, {
   setUniform,
   setScene(patch) { Object.assign(scene, patch); if (patch.sun) Object.assign(scene.lights[0], patch.sun); dirty = true; },
   exportFlags, exportToml, exportTres, compare,
+  // Replaces a texture as a dropped file does: `bytes` an encoded image (PNG, JPEG, WebP).
+  replaceTexture(name, bytes) {
+    const slot = st.reflection.bindings.textures.find((t) => t.name === name);
+    if (!slot) throw new Error(`no texture \`${name}\``);
+    return replaceTexture(slot, new Blob([new Uint8Array(bytes)]));
+  },
   // Resolves with the next frame rendered after the call.
   async nextFrame() {
     const start = G.frames;

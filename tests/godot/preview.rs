@@ -228,6 +228,24 @@ fn a_textured_material_renders_with_its_texture() {
     );
     assert!(textured.nan == 0 && textured.inf == 0, "non-finite pixels");
     assert!(textured.mean_rel * 10.0 < bare.mean_rel, "the page's image is not the textured one");
+
+    // An image dropped on the texture's row replaces it; gdsky render with `--texture` of the
+    // same file agrees. A texture of one grey has no sub-texel differences to make, so the
+    // GPU-against-CPU bounds hold.
+    let grey = dir.join("grey.png");
+    let mut bytes = Vec::new();
+    let mut encoder = png::Encoder::new(&mut bytes, 4, 4);
+    encoder.set_color(png::ColorType::Rgba);
+    encoder.set_depth(png::BitDepth::Eight);
+    encoder.write_header().and_then(|mut w| w.write_image_data(&[150u8; 64])).expect("encodes");
+    std::fs::write(&grey, &bytes).expect("writes the PNG");
+    page.eval(&format!("gdsky.replaceTexture('clouds', {})", serde_json::to_string(&bytes).expect("JSON")));
+    let row = page.eval("document.querySelector('[data-texture=clouds]').textContent");
+    assert!(row.as_str().is_some_and(|r| r.contains("4×4") && r.contains("dropped")), "{row}");
+    let (pixels, _, _) = page.frame();
+    let texture = format!("clouds={}", grey.display());
+    let reference = render(&dir, "dropped", &[&[material, "--texture", texture.as_str()][..], &scene[..]].concat());
+    assert_close("noise_clouds.tres with a dropped grey texture", &pixels, &reference);
 }
 
 /// A browser without WebGPU: the page says so and shows gdsky's own render of the sky instead,

@@ -1,7 +1,8 @@
 // Drives one page in headless Chromium with WebGPU (SwiftShader) for tests/godot/preview.rs:
 //   node page_driver.mjs ORACLE_DIR CHROMIUM URL [no-webgpu]
 // (`no-webgpu`: the page sees a browser without WebGPU, navigator.gpu undefined)
-// then one JSON line per request on stdin, {"js": "expression"}, answered on stdout by
+// then one JSON line per request on stdin, {"js": "expression"} or {"screenshot": "PATH.png"},
+// answered on stdout by
 // {"ok": true, "value": ...} or {"ok": false, "error": "..."}; the expression is evaluated in the
 // page and awaited. The first line out is {"event": "loaded"} once the page has loaded.
 // Console messages and page errors go to stderr. Closing stdin closes the browser.
@@ -35,8 +36,8 @@ const lines = readline.createInterface({ input: process.stdin });
 for await (const line of lines) {
   if (!line.trim()) continue;
   try {
-    const { js } = JSON.parse(line);
-    const value = await page.evaluate(js);
+    const { js, screenshot } = JSON.parse(line);
+    const value = screenshot ? (await page.screenshot({ path: screenshot }), screenshot) : await page.evaluate(js);
     console.log(JSON.stringify({ ok: true, value: value === undefined ? null : value }));
   } catch (e) {
     console.log(JSON.stringify({ ok: false, error: String((e && e.message) || e) }));
