@@ -665,7 +665,7 @@ function exportToml() {
 
 function exportTres() {
   const lines = ['[gd_resource type="ShaderMaterial" load_steps=2 format=3]', '',
-    `[ext_resource type="Shader" path="res://${st.name}.gdshader" id="1"]`, '', '[resource]', 'shader = ExtResource("1")'];
+    `[ext_resource type="Shader" path="${st.shader_res || `res://${st.name}.gdshader`}" id="1"]`, '', '[resource]', 'shader = ExtResource("1")'];
   for (const u of uniforms()) {
     const vs = readUniform(u).map(num), kind = scalar(u.type), color = u.hints.some((h) => h.name === 'source_color');
     let text;

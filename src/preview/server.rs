@@ -227,6 +227,8 @@ fn respond(
             Some((state.to_string().into_bytes(), "application/json"))
         }),
         "/material.bin" => snapshot(&|s| Some((s.good.as_ref()?.material.clone(), "application/octet-stream"))),
+        // Browsers ask for it unbidden; nothing, rather than a 404 in the page's console.
+        "/favicon.ico" => Some((Vec::new(), "image/x-icon")),
         "/events" => {
             events(request, shared, stop);
             return;

@@ -123,6 +123,7 @@ pub fn load_state(input: &Input, setup: &Setup) -> Result<PageState, Error> {
     let camera = &scene.camera;
     let state = json!({
         "name": name,
+        "shader_res": input.shader.as_deref().map(res_path),
         "wgsl": loaded.wgsl,
         "reflection": reflection,
         "bindings": binding_list,
@@ -156,6 +157,19 @@ pub fn load_state(input: &Input, setup: &Setup) -> Result<PageState, Error> {
     watched.sort();
     watched.dedup();
     Ok(PageState { state, material, textures, watched, sky: Some(std::sync::Arc::new(loaded)) })
+}
+
+/// The shader as a `.tres` names it: `res://` and its path from the folder of the
+/// `project.godot` above it, or its file name when it is in no Godot project.
+fn res_path(shader: &std::path::Path) -> String {
+    let full = std::fs::canonicalize(shader).unwrap_or_else(|_| shader.to_path_buf());
+    let within = full
+        .ancestors()
+        .skip(1)
+        .find(|dir| dir.join("project.godot").is_file())
+        .and_then(|root| full.strip_prefix(root).ok().map(|p| p.to_string_lossy().replace('\\', "/")));
+    let file = || full.file_name().map_or_else(String::new, |f| f.to_string_lossy().into_owned());
+    format!("res://{}", within.unwrap_or_else(file))
 }
 
 /// The WebGPU format name of a texel format.

@@ -268,6 +268,7 @@ fn without_webgpu_the_page_says_so_and_shows_gdskys_render() {
 fn a_broken_edit_shows_the_diagnostic_over_the_last_good_frame() {
     let dir = scratch("preview", "reload");
     let shader = dir.join("sky.gdshader");
+    std::fs::write(dir.join("project.godot"), "[application]\n").expect("writes the project");
     let good =
         "shader_type sky;\nuniform float level = 0.25;\nvoid sky() {\n    COLOR = vec3(level, EYEDIR.y, 0.5);\n}\n";
     std::fs::write(&shader, good).expect("writes the shader");
@@ -300,6 +301,25 @@ fn a_broken_edit_shows_the_diagnostic_over_the_last_good_frame() {
     assert_eq!(page.eval("getComputedStyle(document.getElementById('error')).display"), json!("none"));
     let (fixed, _, _) = page.frame();
     assert!((fixed[0][0] - 0.75).abs() < 1e-6, "the new value renders: {:?}", fixed[0]);
+
+    // The page's state exported as a `.tres` and as a scene TOML: `gdsky render` of either is
+    // the page's frame (in the camera view, where the directions agree; bounds as above).
+    page.eval("gdsky.setUniform('level', 0.5); gdsky.setScene({ projection: 'camera', sun: { elevation_deg: 33 } })");
+    let (page_frame, _, _) = page.frame();
+    let tres = page.eval("gdsky.exportTres()");
+    let tres = tres.as_str().expect("text");
+    assert!(tres.contains("path=\"res://sky.gdshader\"") && tres.contains("shader_parameter/level = 0.5"), "{tres}");
+    std::fs::write(dir.join("exported.tres"), tres).expect("writes the material");
+    let tres = dir.join("exported.tres");
+    let exported =
+        render(&dir, "from_tres", &[tres.to_str().expect("utf-8"), "--size", "64x32", "--projection", "camera"]);
+    assert_close("the exported .tres", &page_frame, &exported);
+    let toml = page.eval("gdsky.exportToml()");
+    let toml = format!("shader = \"sky.gdshader\"\n{}", toml.as_str().expect("text"));
+    assert!(toml.contains("elevation = 33") && toml.contains("level = 0.5"), "{toml}");
+    std::fs::write(dir.join("exported.toml"), toml).expect("writes the scene");
+    let exported = render(&dir, "from_toml", &[dir.join("exported.toml").to_str().expect("utf-8")]);
+    assert_close("the exported scene TOML", &page_frame, &exported);
 }
 
 /// Every WGSL module gdsky emits for the shipped skies, the fixture and the test shaders
