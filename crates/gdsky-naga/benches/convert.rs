@@ -72,6 +72,12 @@ fn convert(c: &mut Criterion) {
             (gdsky_naga::to_wgsl(black_box(&lowered)).map(|w| w.len()), gdsky_naga::to_spirv(&lowered).map(|s| s.len()))
         })
     });
+    stages.bench_function("WGSL alone (written, re-read, validated)", |b| {
+        b.iter(|| gdsky_naga::to_wgsl(black_box(&lowered)).map(|w| w.len()))
+    });
+    stages.bench_function("SPIR-V alone (written, re-read, validated)", |b| {
+        b.iter(|| gdsky_naga::to_spirv(black_box(&lowered)).map(|s| s.len()))
+    });
     stages.finish();
 }
 
